@@ -1,0 +1,216 @@
+"""Form factors by the hemi-cube on the GPU (dissertation §4.1.1).
+
+For each patch, the scene is drawn into the five faces of a hemi-cube at its
+centre as an item buffer of patch ids (depth test on). The pixels showing
+patch j, weighted by their delta form factors, sum to F_ij. Work is batched:
+many hemi-cubes share one atlas framebuffer and are drawn by one instanced
+draw call; a compute shader reduces the atlas into rows of F on the GPU; one
+readback per batch.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import gl
+from .patches import Patches
+from .solution import SolveCancelled, SolveError
+
+FIXED_POINT_ONE = 1 << 31  # delta form factors are summed as integers, 2^31 = 1
+ATLAS_LIMIT = 4096  # atlas side in pixels (llvmpipe allows 16384; 4096 keeps memory modest)
+NO_PATCH = 0
+
+
+def delta_form_factors(resolution: int, normalize: bool = True) -> np.ndarray:
+    """Delta form factors of one hemi-cube tile: (3R, R) image, rows [0, R) top face,
+    then the four half side faces of R/2 rows each (z = height above the base).
+
+    Squared forms (DESIGN.md): top ΔA / (π (x²+y²+1)²), side z ΔA / (π (x²+z²+1)²).
+    Normalized, the whole hemi-cube sums to exactly 1.
+    """
+    r = resolution
+    x = -1 + (np.arange(r) + 0.5) * 2 / r
+    pixel_area = (2 / r) ** 2
+    top = pixel_area / (np.pi * (x[None, :] ** 2 + x[:, None] ** 2 + 1) ** 2)
+    z = (np.arange(r // 2) + 0.5) * 2 / r
+    side = z[:, None] * pixel_area / (np.pi * (x[None, :] ** 2 + z[:, None] ** 2 + 1) ** 2)
+    tile = np.concatenate([top] + [side] * 4, axis=0)
+    return tile / tile.sum() if normalize else tile
+
+
+def fixed_point_weights(tile: np.ndarray) -> np.ndarray:
+    """Round to integers that sum to exactly 2^31, so a full hemi-cube row sums to 1."""
+    weights = np.floor(tile.ravel() * FIXED_POINT_ONE).astype(np.int64)
+    shortfall = FIXED_POINT_ONE - int(weights.sum())
+    # give the rounding remainder to the largest fractional parts
+    fractions = tile.ravel() * FIXED_POINT_ONE - weights
+    weights[np.argsort(fractions)[::-1][:shortfall]] += 1
+    return weights.astype(np.uint32)
+
+
+def patch_frames(patches: Patches) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Centre, tangent, bitangent, normal of every patch (orthonormal frames)."""
+    normal = patches.normal
+    edge = patches.corners[:, 1] - patches.corners[:, 0]
+    tangent = edge - (edge * normal).sum(axis=1, keepdims=True) * normal
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    bitangent = np.cross(normal, tangent)
+    return patches.center, tangent, bitangent, normal
+
+
+def face_instances(patches: Patches, first: int, count: int, resolution: int,
+                   tiles_per_row: int, atlas_size: tuple[int, int]) -> np.ndarray:
+    """Per-instance rows (eye, right, up, forward, tile rect, up_min) for 5 faces of patches
+    first..first+count, laid out like `delta_form_factors` inside each tile."""
+    centre, t, b, n = (v[first:first + count] for v in patch_frames(patches))
+    # (forward, right, up, row offset in tile, rows, up_min) for top, +t, -t, +b, -b
+    faces = [
+        (n, t, b, 0, resolution, -1.0),
+        (t, b, n, resolution, resolution // 2, 0.0),
+        (-t, -b, n, resolution + resolution // 2, resolution // 2, 0.0),
+        (b, -t, n, 2 * resolution, resolution // 2, 0.0),
+        (-b, t, n, 2 * resolution + resolution // 2, resolution // 2, 0.0),
+    ]
+    slot = np.arange(count)
+    tile_x = (slot % tiles_per_row) * resolution
+    tile_y = (slot // tiles_per_row) * 3 * resolution
+    width, height = atlas_size
+    rows = []
+    for forward, right, up, row_offset, row_count, up_min in faces:
+        x0 = tile_x / width * 2 - 1
+        x1 = (tile_x + resolution) / width * 2 - 1
+        y0 = (tile_y + row_offset) / height * 2 - 1
+        y1 = (tile_y + row_offset + row_count) / height * 2 - 1
+        rect = np.stack([x0, y0, x1, y1], axis=1)
+        rows.append(np.concatenate([centre, right, up, forward, rect, np.full((count, 1), up_min)], axis=1))
+    # instance order: slot-major, 5 faces each
+    return np.stack(rows, axis=1).reshape(count * 5, -1).astype(np.float32)
+
+
+def scene_geometry(patches: Patches) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex rows (position, normal, patch id) and triangle indices of all patches."""
+    count = len(patches)
+    normal = np.repeat(patches.normal, 4, axis=0).astype(np.float32)
+    position = patches.corners.reshape(-1, 3).astype(np.float32)
+    ids = np.repeat(np.arange(count, dtype=np.uint32), 4)
+    vertices = np.empty(count * 4, dtype=[("p", "f4", 3), ("n", "f4", 3), ("id", "u4")])
+    vertices["p"], vertices["n"], vertices["id"] = position, normal, ids
+    base = (np.arange(count) * 4)[:, None]
+    quads = base + np.array([0, 1, 2, 0, 2, 3])
+    triangles = base + np.array([0, 1, 2, 0, 1, 2])  # the degenerate half is dropped below
+    indices = np.where(patches.is_triangle[:, None], triangles, quads)
+    keep = np.ones_like(indices, dtype=bool)
+    keep[patches.is_triangle, 3:] = False
+    return vertices, indices[keep].astype(np.uint32)
+
+
+def matrix_bytes(patch_count: int) -> int:
+    return patch_count * patch_count * 4
+
+
+def check_memory(patch_count: int, limit_bytes: int) -> None:
+    need = matrix_bytes(patch_count)
+    if need > limit_bytes:
+        raise SolveError(
+            f"the hemi-cube method needs a {patch_count}x{patch_count} form-factor matrix"
+            f" ({need / 2**30:.1f} GiB, limit {limit_bytes / 2**30:.1f} GiB);"
+            " use --method progressive or a smaller --subdiv"
+        )
+
+
+class HemicubeRenderer:
+    """GPU objects for one scene and resolution; `rows(first, count)` gives F rows."""
+
+    def __init__(self, ctx, patches: Patches, resolution: int, scene_diameter: float):
+        self.ctx = ctx
+        self.patches = patches
+        self.resolution = resolution
+        self.patch_count = len(patches)
+        self.tiles_per_row = max(1, ATLAS_LIMIT // resolution)
+        tile_rows = max(1, ATLAS_LIMIT // (3 * resolution))
+        self.slots = self.tiles_per_row * tile_rows
+        self.atlas_size = (self.tiles_per_row * resolution, tile_rows * 3 * resolution)
+
+        self.program = gl.program(ctx, "hemicube_item_buffer.vert", "hemicube_item_buffer.frag")
+        self.program["near"] = 1e-3 * scene_diameter
+        self.program["far"] = 4.0 * scene_diameter
+        vertices, indices = scene_geometry(patches)
+        self.vertex_buffer = ctx.buffer(vertices.tobytes())
+        self.index_buffer = ctx.buffer(indices.tobytes())
+        self.instance_buffer = ctx.buffer(reserve=self.slots * 5 * 17 * 4)
+        self.vao = ctx.vertex_array(
+            self.program,
+            [
+                (self.vertex_buffer, "3f 3f 1u", "in_position", "in_normal", "in_patch"),
+                (self.instance_buffer, "3f 3f 3f 3f 4f 1f/i",
+                 "in_eye", "in_right", "in_up", "in_forward", "in_tile", "in_up_min"),
+            ],
+            index_buffer=self.index_buffer,
+            index_element_size=4,
+        )
+        self.item_texture = ctx.texture(self.atlas_size, 1, dtype="u4")
+        self.item_texture.filter = (ctx.NEAREST, ctx.NEAREST)
+        self.depth = ctx.depth_renderbuffer(self.atlas_size, )
+        self.framebuffer = ctx.framebuffer([self.item_texture], self.depth)
+
+        self.reduce = gl.compute(ctx, "hemicube_form_factor_rows.comp")
+        weights = fixed_point_weights(delta_form_factors(resolution))
+        self.weight_buffer = ctx.buffer(weights.tobytes())
+        self.row_buffer = ctx.buffer(reserve=self.slots * self.patch_count * 4)
+        self.reduce["tile_size"] = (resolution, 3 * resolution)
+        self.reduce["tiles_per_row"] = self.tiles_per_row
+        self.reduce["patch_count"] = self.patch_count
+        self.reduce["item_buffer"] = 0
+
+    def rows(self, first: int, count: int) -> np.ndarray:
+        """Rows first..first+count of F (float64, count x P)."""
+        ctx = self.ctx
+        instances = face_instances(self.patches, first, count, self.resolution, self.tiles_per_row, self.atlas_size)
+        self.instance_buffer.write(instances.tobytes())
+        self.framebuffer.use()
+        self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
+        ctx.enable_only(ctx.DEPTH_TEST)
+        self.vao.render(instances=count * 5)
+
+        self.row_buffer.clear()
+        self.item_texture.use(0)
+        self.weight_buffer.bind_to_storage_buffer(1)
+        self.row_buffer.bind_to_storage_buffer(2)
+        self.reduce["slots"] = count
+        ctx.memory_barrier()
+        self.reduce.run(gl.groups(self.resolution, 16), gl.groups(3 * self.resolution, 16), count)
+        ctx.memory_barrier()
+        sums = np.frombuffer(self.row_buffer.read(size=count * self.patch_count * 4), dtype=np.uint32)
+        return sums.reshape(count, self.patch_count).astype(np.float64) / FIXED_POINT_ONE
+
+    def item_image(self, slot: int = 0) -> np.ndarray:
+        """The item buffer of one tile (3R x R, patch id + 1, 0 = nothing): for tests and debugging."""
+        atlas = np.frombuffer(self.item_texture.read(), dtype=np.uint32).reshape(self.atlas_size[1], self.atlas_size[0])
+        r = self.resolution
+        x, y = (slot % self.tiles_per_row) * r, (slot // self.tiles_per_row) * 3 * r
+        return atlas[y:y + 3 * r, x:x + r]
+
+    def release(self):
+        for obj in (self.vao, self.vertex_buffer, self.index_buffer, self.instance_buffer, self.framebuffer,
+                    self.item_texture, self.depth, self.reduce, self.weight_buffer, self.row_buffer, self.program):
+            obj.release()
+
+
+def form_factor_matrix(ctx, patches: Patches, resolution: int, scene_diameter: float,
+                       progress=None, should_cancel=None) -> np.ndarray:
+    """F (P x P, float32): F[i, j] = fraction of patch i's hemisphere covered by patch j."""
+    count = len(patches)
+    matrix = np.zeros((count, count), dtype=np.float32)
+    renderer = HemicubeRenderer(ctx, patches, resolution, scene_diameter)
+    try:
+        for first in range(0, count, renderer.slots):
+            if should_cancel is not None and should_cancel():
+                raise SolveCancelled("cancelled")
+            batch = min(renderer.slots, count - first)
+            matrix[first:first + batch] = renderer.rows(first, batch)
+            if progress is not None:
+                done = first + batch
+                progress(done / count, f"hemi-cubes {done}/{count}", {"hemicubes": done})
+    finally:
+        renderer.release()
+    return matrix

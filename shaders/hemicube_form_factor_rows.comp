@@ -1,0 +1,27 @@
+#version 430
+// Sums the delta form factors of the pixels that show each patch: row i of F
+// for every hemi-cube tile of the batch. Weights are fixed point (2^31 = 1) so
+// integer atomics make the sums exact and order-independent.
+layout(local_size_x = 16, local_size_y = 16, local_size_z = 1) in;
+
+uniform usampler2D item_buffer;
+layout(std430, binding = 1) readonly buffer DeltaFormFactors { uint delta_form_factor[]; };
+layout(std430, binding = 2) buffer Rows { uint row[]; };
+
+uniform ivec2 tile_size;
+uniform int tiles_per_row;
+uniform int slots;
+uniform int patch_count;
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    int slot = int(gl_GlobalInvocationID.z);
+    if (pixel.x >= tile_size.x || pixel.y >= tile_size.y || slot >= slots) {
+        return;
+    }
+    ivec2 origin = ivec2(slot % tiles_per_row, slot / tiles_per_row) * tile_size;
+    uint item = texelFetch(item_buffer, origin + pixel, 0).r;
+    if (item != 0u) {
+        atomicAdd(row[slot * patch_count + int(item) - 1], delta_form_factor[pixel.y * tile_size.x + pixel.x]);
+    }
+}

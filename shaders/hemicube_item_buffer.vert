@@ -1,0 +1,46 @@
+#version 430
+// Hemi-cube item buffer: draws every patch into one face of one hemi-cube.
+// One instance = one face of one patch's hemi-cube; its tile in the atlas is
+// kept apart from the others by clip distances, so a batch of hemi-cubes is a
+// single instanced draw.
+
+in vec3 in_position;
+in vec3 in_normal;      // the triangle's front normal
+in uint in_patch;       // patch id
+
+in vec3 in_eye;         // per instance: hemi-cube centre
+in vec3 in_right;       // face axes: right, up, forward (world space)
+in vec3 in_up;
+in vec3 in_forward;
+in vec4 in_tile;        // tile rectangle in atlas NDC: x0, y0, x1, y1
+in float in_up_min;     // -1 for the top face, 0 for the half side faces
+
+uniform float near;
+uniform float far;
+
+flat out uint item;
+out float gl_ClipDistance[5];
+
+void main() {
+    vec3 d = in_position - in_eye;
+    float a = dot(d, in_right);
+    float b = dot(d, in_up);
+    float c = dot(d, in_forward);
+
+    // Keep only this face's frustum: |a| <= c, up_min c <= b <= c, c >= near.
+    gl_ClipDistance[0] = c - a;
+    gl_ClipDistance[1] = c + a;
+    gl_ClipDistance[2] = c - b;
+    gl_ClipDistance[3] = b - in_up_min * c;
+    gl_ClipDistance[4] = c - near;
+
+    // Face coordinates (a/c, b/c) mapped to the tile, written homogeneously in c
+    // so perspective-correct rasterization still holds.
+    float x = in_tile.x * c + 0.5 * (a + c) * (in_tile.z - in_tile.x);
+    float y = in_tile.y * c + (b - in_up_min * c) / (1.0 - in_up_min) * (in_tile.w - in_tile.y);
+    float z = (c * (far + near) - 2.0 * far * near) / (far - near);
+    gl_Position = vec4(x, y, z, c);
+
+    // Backs of patches occlude but receive nothing: item 0 means "no patch".
+    item = dot(in_eye - in_position, in_normal) > 0.0 ? in_patch + 1u : 0u;
+}
