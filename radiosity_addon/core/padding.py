@@ -1,0 +1,78 @@
+"""Padding shared by the progressive solver's element tiles and the lightmaps.
+
+One implementation of "fill the texels around covered texels from the inside"
+(gutters, so bilinear/trilinear filtering never reads garbage) and of
+coverage-aware downsampling (mip levels that uncovered texels don't darken).
+All vectorized numpy over whole images.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# (dy, dx, weight): edge neighbours dominate, diagonal ones only fill corners, so a
+# gutter texel continues the covered texel straight inside it (clamp-to-edge).
+_NEIGHBOURS = [(dy, dx, 1.0 if dy == 0 or dx == 0 else 1e-3)
+               for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
+
+
+def _shifted(array: np.ndarray, dy: int, dx: int, fill) -> np.ndarray:
+    """array moved by (dy, dx): out[y, x] = array[y - dy, x - dx], `fill` where that is outside."""
+    out = np.full_like(array, fill)
+    h, w = array.shape[:2]
+    ys, yd = slice(max(0, -dy), h - max(0, dy)), slice(max(0, dy), h - max(0, -dy))
+    xs, xd = slice(max(0, -dx), w - max(0, dx)), slice(max(0, dx), w - max(0, -dx))
+    out[yd, xd] = array[ys, xs]
+    return out
+
+
+def dilate(values: np.ndarray, covered: np.ndarray, rings: int) -> tuple[np.ndarray, np.ndarray]:
+    """Grow covered regions by `rings` texels: each new texel takes the weighted mean of its
+    covered 8-neighbours (inside values only; edge neighbours weigh most). values (H, W, C), covered (H, W) bool.
+    Returns new (values, covered); texels never reached keep their values and stay uncovered."""
+    values = np.where(covered[..., None], values, 0).astype(np.float64)
+    covered = covered.copy()
+    for _ in range(rings):
+        total = np.zeros_like(values)
+        count = np.zeros(covered.shape, dtype=np.float64)
+        for dy, dx, weight in _NEIGHBOURS:
+            neighbour_weight = weight * _shifted(covered, dy, dx, False)
+            total += neighbour_weight[..., None] * _shifted(values, dy, dx, 0.0)
+            count += neighbour_weight
+        grow = ~covered & (count > 0)
+        if not grow.any():
+            break
+        values[grow] = total[grow] / count[grow][:, None]
+        covered = covered | grow
+    return values, covered
+
+
+def downsample_covered(values: np.ndarray, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Halve an image by 2x2 coverage-weighted means; a texel is covered if any child is.
+    Odd sizes are padded with uncovered texels."""
+    h, w = covered.shape
+    ph, pw = h + h % 2, w + w % 2
+    padded_values = np.zeros((ph, pw, values.shape[2]))
+    padded_covered = np.zeros((ph, pw))
+    padded_values[:h, :w] = np.where(covered[..., None], values, 0)
+    padded_covered[:h, :w] = covered
+    weight = padded_covered.reshape(ph // 2, 2, pw // 2, 2).sum(axis=(1, 3))
+    total = padded_values.reshape(ph // 2, 2, pw // 2, 2, -1).sum(axis=(1, 3))
+    level = np.where(weight[..., None] > 0, total / np.maximum(weight, 1)[..., None], 0.0)
+    return level, weight > 0
+
+
+def pad_tiles(tiles: np.ndarray, gutter: int) -> np.ndarray:
+    """(N, S, S, C) tiles -> (N, S + 2g, S + 2g, C) with each gutter filled from its own tile
+    by `dilate` (edge texels continued outward), so filtered reads at tile edges stay correct."""
+    n, s, _, c = tiles.shape
+    size = s + 2 * gutter
+    values = np.zeros((n, size, size, c))
+    values[:, gutter:gutter + s, gutter:gutter + s] = tiles
+    covered = np.zeros((size, size), dtype=bool)
+    covered[gutter:gutter + s, gutter:gutter + s] = True
+    # all tiles side by side with a gap of 2g so one dilate call serves every tile
+    strip = values.transpose(1, 0, 2, 3).reshape(size, n * size, c)
+    strip_covered = np.tile(covered, (1, n))
+    filled, _ = dilate(strip, strip_covered, gutter)
+    return filled.reshape(size, n, size, c).transpose(1, 0, 2, 3)
