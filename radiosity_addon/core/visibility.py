@@ -25,7 +25,8 @@ import numpy as np
 from . import gl
 from .patches import Patches
 
-TESSELLATION = 8
+TESSELLATION = 8  # most segments per patch side
+SEGMENT_ANGLE = 0.1  # radians seen from the eye per segment, at most (when TESSELLATION allows)
 
 
 @dataclass(frozen=True)
@@ -70,7 +71,8 @@ class VisibilityMap:
         n = self.variant.tessellation
         self.program = gl.program(
             ctx, "hemisphere_item_buffer.vert", "hemisphere_item_buffer.frag", "hemisphere_item_buffer.geom",
-            defines={"TESSELLATION": n, "MAX_VERTICES": 2 * (n + 1) * n},
+            defines={"TESSELLATION": n, "MAX_VERTICES": 2 * (n + 1) * n,
+                     "SEGMENT_ANGLE": SEGMENT_ANGLE if n > 1 else 1e9},
         )
         self.program["near"] = 0.0
         self.program["far"] = 2.0 * scene_diameter
