@@ -8,7 +8,9 @@
 // edge; tessellating makes the approximation close. TESSELLATION = 1 is the
 // plain projection of Coombe et al. Fewer segments are used for patches that
 // look small from the eye (SEGMENT_ANGLE radians each at most).
-layout(lines_adjacency) in;
+// Rows of the grid are shared among INVOCATIONS geometry shader invocations
+// so that the output of each stays within portable limits.
+layout(lines_adjacency, invocations = INVOCATIONS) in;
 layout(triangle_strip, max_vertices = MAX_VERTICES) out;
 
 in vec3 v_position[];
@@ -57,7 +59,7 @@ void main() {
         }
     }
     int n = clamp(int(ceil(extent / SEGMENT_ANGLE)), 1, TESSELLATION);
-    for (int j = 0; j < n; ++j) {
+    for (int j = gl_InvocationID; j < n; j += INVOCATIONS) {
         float t0 = float(j) / float(n);
         float t1 = float(j + 1) / float(n);
         for (int i = 0; i <= n; ++i) {

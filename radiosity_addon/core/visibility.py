@@ -6,7 +6,8 @@ patch id + 1 (0: nothing, or the back of a patch). The shooting pass then
 looks receivers up in it. Variants (see `VARIANTS`):
 
 - plain: each patch drawn as two straight triangles (Coombe et al. 2004);
-- tessellated: each patch split into TESSELLATION^2 quads in a geometry shader
+- tessellated: each patch split into up to TESSELLATION^2 quads (fewer when it looks
+  small from the eye) in a geometry shader
   (dissertation Algorithm 7), so the straight edges follow the curved image;
 - search: tessellated, and a receiver also accepts its id in the texels
   around its own (dissertation Algorithm 8).
@@ -25,7 +26,8 @@ import numpy as np
 from . import gl
 from .patches import Patches
 
-TESSELLATION = 8  # most segments per patch side
+TESSELLATION = 32  # most segments per patch side
+GEOMETRY_INVOCATIONS = 16  # geometry shader instances per patch, each drawing every 16th row
 SEGMENT_ANGLE = 0.1  # radians seen from the eye per segment, at most (when TESSELLATION allows)
 
 
@@ -71,7 +73,8 @@ class VisibilityMap:
         n = self.variant.tessellation
         self.program = gl.program(
             ctx, "hemisphere_item_buffer.vert", "hemisphere_item_buffer.frag", "hemisphere_item_buffer.geom",
-            defines={"TESSELLATION": n, "MAX_VERTICES": 2 * (n + 1) * n,
+            defines={"TESSELLATION": n, "INVOCATIONS": min(n, GEOMETRY_INVOCATIONS),
+                     "MAX_VERTICES": 2 * (n + 1) * -(-n // min(n, GEOMETRY_INVOCATIONS)),
                      "SEGMENT_ANGLE": SEGMENT_ANGLE if n > 1 else 1e9},
         )
         self.program["near"] = 0.0
