@@ -46,6 +46,13 @@ void main() {
     if (int(v_patch[0]) == skip_patch) {
         return;
     }
+    float highest = -1.0;
+    for (int k = 0; k < 4; ++k) {
+        highest = max(highest, dot(v_position[k] - eye, axis_z));
+    }
+    if (highest <= 0.0) {
+        return;  // wholly behind the eye's hemisphere
+    }
     vec3 normal = cross(v_position[2] - v_position[0], v_position[3] - v_position[1]);
     // Backs of patches occlude but receive nothing: item 0 means "no patch".
     uint id = dot(eye - v_position[0], normal) > 0.0 ? v_patch[0] + 1u : 0u;
