@@ -261,3 +261,16 @@ def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(ctx):
     difference = np.abs(face_means(progressive) - reference).max(axis=1) / reference.max(axis=1)
     worst = int(np.argmax(difference))
     assert difference.max() < 0.05, f"{scene.surfaces[worst].name}: {difference.max():.3f}"
+
+
+def test_cancel_and_shot_budget(ctx):
+    from radiosity_addon.core.solution import SolveCancelled
+
+    scene = cube(0.5, {"ceiling": 1.0})
+    calls = []
+    with pytest.raises(SolveCancelled):
+        solve(scene, SolveSettings(subdiv=1, elements=1), ctx=ctx,
+              should_cancel=lambda: calls.append(1) or len(calls) > 3)
+    solution = solve(scene, SolveSettings(subdiv=1, elements=1, max_shots=2, tolerance=1e-6), ctx=ctx)
+    assert solution.report["shots"] == 2 and solution.report["stop_reason"] == "max_shots"
+    assert solution.report["unshot_fraction"] > 1e-6
