@@ -236,6 +236,9 @@ def test_energy_balance_of_closed_scene_within_half_percent(lit_cube):
     assert energy["emitted"] == pytest.approx(emitted, rel=1e-12)
     assert abs(absorbed + energy["unshot_gpu_sum"] - emitted) < 0.005 * emitted
     assert energy["escaped"] < 0.005 * emitted  # closed: nothing should leave
+    assert energy["surplus"] < 0.005 * emitted
+    booked = energy["absorbed"] + energy["escaped"] + energy["unshot"] - energy["surplus"]
+    assert booked == pytest.approx(emitted, rel=1e-9)
     assert energy["absorbed"] == pytest.approx(absorbed, rel=1e-3)
     assert energy["unshot"] == pytest.approx(energy["unshot_gpu_sum"], rel=1e-3, abs=1e-6 * emitted)
 

@@ -27,7 +27,13 @@ from .visibility import VARIANTS, VisibilityMap
 
 
 class EnergyLedger:
-    """Power accounts in float64 (RGB): emitted = absorbed + escaped + unshot."""
+    """Power accounts in float64 (RGB): emitted + surplus = absorbed + escaped + unshot.
+
+    A shot's hit fraction is the shooter's form-factor row sum over all elements. In a closed
+    scene it should be 1; point-sampled factors make it a little more (near corners) or less
+    (along shared edges). The shortfall is booked as escaped, the excess as `surplus`
+    (energy the discretization created), so the accounts balance exactly either way.
+    """
 
     def __init__(self, emitted: np.ndarray):
         self.emitted = np.asarray(emitted, dtype=np.float64)
@@ -35,6 +41,7 @@ class EnergyLedger:
         self.absorbed = np.zeros(3)
         self.reflected = np.zeros(3)
         self.escaped = np.zeros(3)
+        self.surplus = np.zeros(3)
         self.pending = None  # power of the shot whose fractions are not yet read back
 
     def settle(self, fractions: np.ndarray) -> None:
@@ -42,12 +49,13 @@ class EnergyLedger:
         if self.pending is None:
             return
         power, self.pending = self.pending, None
-        hit = min(float(fractions[0]), 1.0)
+        hit = float(fractions[0])
         reflected = np.minimum(fractions[1:4], hit)
         self.shot += power
         self.reflected += reflected * power
         self.absorbed += (hit - reflected) * power
-        self.escaped += (1.0 - hit) * power
+        self.escaped += max(1.0 - hit, 0.0) * power
+        self.surplus += max(hit - 1.0, 0.0) * power
 
     @property
     def unshot(self) -> np.ndarray:
@@ -57,6 +65,7 @@ class EnergyLedger:
         total = lambda v: float(np.sum(v))  # noqa: E731
         return {
             "emitted": total(self.emitted), "absorbed": total(self.absorbed), "escaped": total(self.escaped),
+            "surplus": total(self.surplus),
             "unshot": total(self.unshot), "shot": total(self.shot), "reflected": total(self.reflected),
             "rgb": {k: v.tolist() for k, v in (("emitted", self.emitted), ("absorbed", self.absorbed),
                                                  ("escaped", self.escaped), ("unshot", self.unshot))},
