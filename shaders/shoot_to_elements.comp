@@ -118,7 +118,8 @@ float disk_form_factor(vec3 x, vec3 n) {
 
 void main() {
     const int per_patch = ELEMENTS * ELEMENTS;
-    int e = int(gl_GlobalInvocationID.x);
+    // rows of work groups beyond 65535 (the portable limit per dimension) go to y
+    int e = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
     bool in_range = e < patch_count * per_patch;
     int element = min(e, patch_count * per_patch - 1);
     int p = element / per_patch;

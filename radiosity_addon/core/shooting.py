@@ -23,7 +23,7 @@ from .visibility import VisibilityMap, frame_from_normal
 READBACK = ("64 bytes per shot: best patch power and index, its unshot power centroid (s, t), its mean residual"
             " (RGB), total unshot power (RGB),"
             " and the previous shot's hit and reflected fractions (fixed point sums)")
-ENERGY_BINDING = 4
+MAX_GROUPS = 65535  # work groups per dispatch dimension guaranteed by OpenGL
 
 
 @dataclass
@@ -160,7 +160,9 @@ class Gatherer:
         self.textures.radiosity.bind_to_image(0, read=True, write=True)
         self.textures.residual.bind_to_image(1, read=True, write=True, level=0)
         self.ctx.memory_barrier()
-        self.program.run(gl.groups(self.element_count, 64))
+        groups = gl.groups(self.element_count, 64)
+        rows = -(-groups // MAX_GROUPS)
+        self.program.run(-(-groups // rows), rows)
         self.ctx.memory_barrier()
 
     def recorded_visibility(self) -> np.ndarray:
