@@ -5,8 +5,9 @@
 // continue) and its residual (unpadded tile, weighted by element area so that
 // mip means are power per patch area). The shooter's own residual is cleared.
 // V is looked up in the shooter's hemispherical item buffer: the receiver
-// looks for its own patch id at its projected position, within SEARCH_RADIUS
-// texels (dissertation Algorithm 8; 0 = the texel itself).
+// looks for its own patch id (or any patch of its own planar surface) at its
+// projected position, within SEARCH_RADIUS texels (dissertation Algorithm 8;
+// 0 = the texel itself).
 // F is the exact unoccluded point-to-polygon form factor (Lambert's contour
 // integral over the shooter polygon clipped to the receiver's hemisphere) when
 // KERNEL_EXACT is 1, else the disk approximation A cos cos / (pi r^2 + A).
@@ -25,6 +26,7 @@ layout(std430, binding = 1) readonly buffer Patch { vec4 normal_area[]; };     /
 layout(std430, binding = 2) readonly buffer Reflectance { vec4 reflectance[]; };
 layout(std430, binding = 3) readonly buffer ElementWeight { float element_weight[]; };  // a_e S^2 / A
 layout(std430, binding = 4) buffer Energy { uint energy[4]; };
+layout(std430, binding = 7) readonly buffer Plane { int plane_of[]; };  // patches of one planar surface share it
 #if RECORD_VISIBILITY
 layout(std430, binding = 5) writeonly buffer Visibility { float visibility_out[]; };
 #endif
@@ -59,12 +61,15 @@ float visibility(vec3 x, vec3 n, int p) {
     }
     vec2 uv = q.xy / length(q) * 0.5 + 0.5;
     ivec2 texel = ivec2(floor(uv * float(item_resolution)));
-    uint wanted = uint(p) + 1u;
+    // A planar surface cannot hide its own points, so any patch of the receiver's plane
+    // seen there counts (patch borders inside a surface are then no obstacle).
+    int plane = plane_of[p];
     bool found = false;
     for (int dy = -SEARCH_RADIUS; dy <= SEARCH_RADIUS; ++dy) {
         for (int dx = -SEARCH_RADIUS; dx <= SEARCH_RADIUS; ++dx) {
             ivec2 at = clamp(texel + ivec2(dx, dy), ivec2(0), ivec2(item_resolution - 1));
-            found = found || texelFetch(item_buffer, at, 0).r == wanted;
+            uint item = texelFetch(item_buffer, at, 0).r;
+            found = found || (item != 0u && plane_of[int(item) - 1] == plane);
         }
     }
     return found ? 1.0 : 0.0;

@@ -76,13 +76,16 @@ class PatchBuffers:
         self.weights = ctx.buffer(textures.weights.astype(np.float32).tobytes())
         self.energy = ctx.buffer(reserve=16)
         self.energy.clear()
+        # patches of one scene surface are coplanar: the visibility lookup accepts any of them
+        self.plane = ctx.buffer(patches.surface.astype(np.int32).tobytes())
 
     def bind(self) -> None:
         for binding, buffer in enumerate((self.corners, self.normal_area, self.reflectance, self.weights, self.energy)):
             buffer.bind_to_storage_buffer(binding)
+        self.plane.bind_to_storage_buffer(7)
 
     def release(self) -> None:
-        for buffer in (self.corners, self.normal_area, self.reflectance, self.weights, self.energy):
+        for buffer in (self.corners, self.normal_area, self.reflectance, self.weights, self.energy, self.plane):
             buffer.release()
 
 
