@@ -217,7 +217,10 @@ def test_unshot_power_decreases_monotonically_and_progress_is_physical(lit_cube)
     assert unshot[0] == pytest.approx(1.0, rel=1e-6) and unshot[-1] <= 1e-3
     assert np.all(np.diff(unshot) <= 1e-7)
     assert np.all(np.diff(fractions) >= -1e-7) and fractions[-1] == pytest.approx(1 - unshot[-1])
-    assert all({"shots", "elapsed", "eta"} <= set(details) for _, details in calls)
+    assert all({"shots", "elapsed", "eta", "ambient"} <= set(details) for _, details in calls)
+    # the preview's ambient term (ρ̄ = 0.9 everywhere) is R · unshot power / total area
+    first = calls[0][1]
+    assert first["ambient"] == pytest.approx([1.0 / 6.0 / 0.1] * 3, rel=1e-5)
 
 
 def test_energy_balance_of_closed_scene_within_half_percent(lit_cube):

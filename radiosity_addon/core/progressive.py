@@ -72,12 +72,14 @@ class EnergyLedger:
         }
 
 
-def ambient_term(patches: Patches, unshot_power: np.ndarray) -> np.ndarray:
-    """Cohen et al. 1988: Ambient = R Σ A ΔB / Σ A, R = 1/(1 − ρ̄). For previews only:
-    a preview shows B + ρ · Ambient; the result never includes it."""
+def ambient_term(patches: Patches):
+    """Cohen et al. 1988: Ambient = R Σ A ΔB / Σ A, R = 1/(1 − ρ̄), as a function of the unshot
+    power Σ A ΔB (RGB). For previews only: a preview shows B + ρ · Ambient; the result never
+    includes it."""
     area = patches.area
     mean_reflectance = (area[:, None] * patches.reflectance).sum(axis=0) / area.sum()
-    return np.asarray(unshot_power) / area.sum() / np.maximum(1.0 - mean_reflectance, 1e-6)
+    scale = 1.0 / (area.sum() * np.maximum(1.0 - mean_reflectance, 1e-6))
+    return lambda unshot_power: np.asarray(unshot_power) * scale
 
 
 def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettings, timer: StageTimer,
@@ -92,6 +94,7 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
     emitted = (patches.area[:, None] * patches.emission).sum(axis=0)
     ledger = EnergyLedger(emitted)
     emitted_total = float(emitted.sum())
+    ambient = ambient_term(patches)
     objects = []
     try:
         with timer.stage("setup"):
@@ -126,7 +129,7 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
                          f"shot {shots}, unshot {fraction_left:.2e} of emitted"
                          + (f", ~{eta:.0f} s left" if eta is not None else ""),
                          {"shots": shots, "elapsed": elapsed, "eta": eta, "unshot_fraction": fraction_left,
-                          "ambient": ambient_term(patches, unshot_gpu).tolist()})
+                          "ambient": ambient(unshot_gpu).tolist()})
             if fraction_left <= tolerance or selection.patch < 0:
                 break
             if shots >= max_shots:
