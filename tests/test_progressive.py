@@ -289,3 +289,23 @@ def test_cancel_and_shot_budget(ctx):
     solution = solve(scene, SolveSettings(subdiv=1, elements=1, max_shots=2, tolerance=1e-6), ctx=ctx)
     assert solution.report["shots"] == 2 and solution.report["stop_reason"] == "max_shots"
     assert solution.report["unshot_fraction"] > 1e-6
+
+
+def test_cli_progressive_writes_elements_and_report(tmp_path):
+    import json
+
+    from radiosity_addon.cli import main
+
+    out, report = tmp_path / "out.npz", tmp_path / "report.json"
+    status = main(["solve", "cornell-box", "--subdiv", "2", "--elements", "2", "--tolerance", "0.05",
+                   "--visibility", "tessellated", "--kernel", "disk", "--output", str(out), "--report", str(report),
+                   "--quiet"])
+    assert status == 0
+    arrays = np.load(out)
+    assert arrays["element_radiosity"].shape == (len(arrays["patch_area"]), 2, 2, 3)
+    data = json.loads(report.read_text())
+    assert data["method"] == "progressive" and data["kernel"] == "disk"
+    assert data["visibility"]["variant"] == "tessellated"
+    assert data["unshot_fraction"] <= 0.05 and data["shots"] > 0
+    assert {"emitted", "absorbed", "escaped", "unshot"} <= set(data["energy"])
+    assert {"select", "visibility", "shoot", "mipmap"} <= set(data["timings"])
