@@ -21,7 +21,7 @@ import numpy as np
 from .element_textures import ElementTextures
 from .patches import Patches
 from .scene import Scene
-from .shooting import READBACK, Gatherer, PatchBuffers, Selector, patch_shooter
+from .shooting import READBACK, Gatherer, PatchBuffers, PatchShooters, Selector
 from .solution import SolveCancelled, SolveSettings, StageTimer
 from .visibility import VARIANTS, VisibilityMap
 
@@ -95,6 +95,7 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
     ledger = EnergyLedger(emitted)
     emitted_total = float(emitted.sum())
     ambient = ambient_term(patches)
+    shooters = PatchShooters(patches)
     objects = []
     try:
         with timer.stage("setup"):
@@ -135,8 +136,8 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
             if shots >= max_shots:
                 stop_reason = "max_shots"
                 break
-            shooter = patch_shooter(patches, selection.patch, selection.residual,
-                                    selection.centroid if settings.shoot_from == "centroid" else None)
+            shooter = shooters.shooter(selection.patch, selection.residual,
+                                       selection.centroid if settings.shoot_from == "centroid" else None)
             ledger.pending = shooter.power
             with timer.stage("visibility"):
                 visibility_map.render(shooter.position, shooter.axes, skip_patch=shooter.patch)

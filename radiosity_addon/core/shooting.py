@@ -40,19 +40,32 @@ class Shooter:
         return self.area * self.radiosity
 
 
+class PatchShooters:
+    """Patches as shooters: their geometry computed once per solve, a `Shooter` per shot."""
+
+    def __init__(self, patches: Patches):
+        self.corners = patches.corners
+        self.normal = patches.normal
+        self.center = patches.center
+        self.area = patches.area
+
+    def shooter(self, index: int, radiosity: np.ndarray, eye_parameters=None) -> Shooter:
+        """Patch `index` shooting `radiosity`; its visibility map is rendered from its centre, or
+        from the bilinear point at `eye_parameters` (s, t) (the centroid of its unshot power)."""
+        normal = self.normal[index]
+        x, y = frame_from_normal(normal, self.corners[index, 1] - self.corners[index, 0])
+        if eye_parameters is None:
+            position = self.center[index]
+        else:
+            position = bilinear(self.corners[index:index + 1], np.float64(eye_parameters[0]),
+                                np.float64(eye_parameters[1]))[0]
+        return Shooter(position=position, axes=(x, y, normal), polygon=self.corners[index],
+                       area=float(self.area[index]), radiosity=np.asarray(radiosity, dtype=np.float64), patch=index)
+
+
 def patch_shooter(patches: Patches, index: int, radiosity: np.ndarray, eye_parameters=None) -> Shooter:
-    """Patch `index` shooting `radiosity`; its visibility map is rendered from its centre, or from
-    the bilinear point at `eye_parameters` (s, t) (the centroid of its unshot power)."""
-    normal = patches.normal[index]
-    edge = patches.corners[index, 1] - patches.corners[index, 0]
-    x, y = frame_from_normal(normal, edge)
-    if eye_parameters is None:
-        position = patches.center[index]
-    else:
-        position = bilinear(patches.corners[index:index + 1], np.float64(eye_parameters[0]),
-                            np.float64(eye_parameters[1]))[0]
-    return Shooter(position=position, axes=(x, y, normal), polygon=patches.corners[index],
-                   area=float(patches.area[index]), radiosity=np.asarray(radiosity, dtype=np.float64), patch=index)
+    """One-off `PatchShooters(patches).shooter(...)` (tests, tools)."""
+    return PatchShooters(patches).shooter(index, radiosity, eye_parameters)
 
 
 @dataclass
