@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .core.gl import GLUnavailable
 from .core.scene import SceneError
-from .core.solution import METHODS, SOLVERS, SolveCancelled, SolveError, SolveSettings
+from .core.solution import METHODS, SOLVERS, VISIBILITY_VARIANTS, SolveCancelled, SolveError, SolveSettings
 
 USER_ERRORS = (SceneError, SolveError, GLUnavailable, SolveCancelled, FileNotFoundError)
 
@@ -37,8 +37,9 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--max-iterations", type=int, default=defaults.max_iterations,
                        help="iteration cap of the linear solvers")
     group.add_argument("--max-shots", type=int, default=None, help="shot budget of the progressive method")
-    group.add_argument("--visibility", choices=("plain", "tessellated", "search"), default=defaults.visibility,
-                       help="progressive visibility variant (default search)")
+    group.add_argument("--visibility", choices=VISIBILITY_VARIANTS, default=defaults.visibility,
+                       help="progressive visibility variant: plain projection, tessellated, tessellated with"
+                            " neighbour search (default), or search guarded against peeking past occluders")
     group.add_argument("--visibility-res", type=int, default=defaults.visibility_res, metavar="R",
                        help=f"pixels across the progressive visibility map (default {defaults.visibility_res})")
     group.add_argument("--shoot-from", choices=("centroid", "centre"), default=defaults.shoot_from,

@@ -14,12 +14,13 @@
 // Each work group also sums the shot's hit fraction and reflected fractions
 // (per channel) of the shooter's power, added in fixed point to `energy`.
 //
-// Defines: ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, RECORD_VISIBILITY.
+// Defines: ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN, RECORD_VISIBILITY.
 layout(local_size_x = 64) in;
 
 layout(rgba32f, binding = 0) uniform image2D radiosity;
 layout(rgba32f, binding = 1) uniform image2D residual;
 uniform usampler2D item_buffer;
+uniform sampler2D distance_map;     // distance from the eye of what each item texel shows (0: nothing)
 
 layout(std430, binding = 0) readonly buffer Corners { vec4 corner[]; };        // 4 per patch
 layout(std430, binding = 1) readonly buffer Patch { vec4 normal_area[]; };     // normal, area
@@ -59,11 +60,23 @@ float visibility(vec3 x, vec3 n, int p) {
     if (q.z <= 0.0) {
         return 0.0;  // behind the shooter
     }
-    vec2 uv = q.xy / length(q) * 0.5 + 0.5;
-    ivec2 texel = ivec2(floor(uv * float(item_resolution)));
+    float r = length(q);
+    vec2 uv = q.xy / r * 0.5 + 0.5;
+    ivec2 texel = clamp(ivec2(floor(uv * float(item_resolution))), ivec2(0), ivec2(item_resolution - 1));
     // A planar surface cannot hide its own points, so any patch of the receiver's plane
     // seen there counts (patch borders inside a surface are then no obstacle).
     int plane = plane_of[p];
+    uint centre = texelFetch(item_buffer, texel, 0).r;
+    if (centre != 0u && plane_of[int(centre) - 1] == plane) {
+        return 1.0;
+    }
+    // Optionally (OCCLUDER_MARGIN >= 0) the search is for rasterization gaps only, not
+    // for peeking past occluders: when the own texel shows something clearly nearer,
+    // the receiver is hidden.
+    float seen = texelFetch(distance_map, texel, 0).r;
+    if (OCCLUDER_MARGIN >= 0.0 && seen > 0.0 && seen < r * (1.0 - OCCLUDER_MARGIN)) {
+        return 0.0;
+    }
     bool found = false;
     for (int dy = -SEARCH_RADIUS; dy <= SEARCH_RADIUS; ++dy) {
         for (int dx = -SEARCH_RADIUS; dx <= SEARCH_RADIUS; ++dx) {

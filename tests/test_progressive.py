@@ -257,6 +257,8 @@ def test_visibility_search_misclassifies_fewer_elements_than_plain(ctx):
     search = measure(ctx, scene, patches, 2, 512, "search", shooters)
     assert search["misclassified"] < tessellated["misclassified"] < plain["misclassified"]
     assert search["misclassified_non_grazing"] < 0.03
+    guarded = measure(ctx, scene, patches, 2, 512, "guarded", shooters)
+    assert guarded["false_visible"] < search["false_visible"]  # fewer leaks past occluders
 
 
 def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(ctx):

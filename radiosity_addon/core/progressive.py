@@ -107,7 +107,8 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
             objects.append(selector)
             visibility_map = VisibilityMap(ctx, patches, resolution, variant, scene.diameter)
             objects.append(visibility_map)
-            gatherer = Gatherer(ctx, textures, buffers, settings.kernel, VARIANTS[variant].search_radius)
+            gatherer = Gatherer(ctx, textures, buffers, settings.kernel, VARIANTS[variant].search_radius,
+                                occluder_margin=VARIANTS[variant].occluder_margin)
             objects.append(gatherer)
 
         shots = 0
@@ -164,7 +165,8 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
         "readback_per_shot": READBACK,
         "visibility": {"variant": variant, "resolution": resolution,
                        "tessellation": VARIANTS[variant].tessellation,
-                       "search_radius": VARIANTS[variant].search_radius, "from": settings.shoot_from},
+                       "search_radius": VARIANTS[variant].search_radius,
+                       "occluder_margin": VARIANTS[variant].occluder_margin, "from": settings.shoot_from},
         "kernel": settings.kernel,
         "elements_per_patch": settings.elements,
         "shots_per_second": shots / solve_seconds if solve_seconds > 0 else None,

@@ -137,7 +137,7 @@ class Gatherer:
     """The shooting pass over all receiving elements."""
 
     def __init__(self, ctx, textures: ElementTextures, buffers: PatchBuffers, kernel: str, search_radius: int,
-                 record_visibility: bool = False):
+                 record_visibility: bool = False, occluder_margin: float = -1.0):
         if kernel not in ("exact", "disk"):
             raise ValueError(f"unknown kernel '{kernel}' (choose exact, disk)")
         self.ctx, self.textures, self.buffers = ctx, textures, buffers
@@ -145,12 +145,15 @@ class Gatherer:
         self.program = gl.compute(ctx, "shoot_to_elements.comp", defines={
             "ELEMENTS": layout.elements, "GUTTER": layout.gutter, "KERNEL_EXACT": int(kernel == "exact"),
             "SEARCH_RADIUS": search_radius, "RECORD_VISIBILITY": int(record_visibility),
+            "OCCLUDER_MARGIN": float(occluder_margin),
         })
         self.element_count = layout.patch_count * layout.elements ** 2
         self.program["patch_count"] = layout.patch_count
         self.program["padded_tiles_per_row"] = layout.padded_tiles_per_row
         self.program["residual_tiles_per_row"] = layout.residual_tiles_per_row
         self.program["item_buffer"] = 0
+        if self.program.get("distance_map", None) is not None:
+            self.program["distance_map"] = 1
         self.visibility = ctx.buffer(reserve=4 * self.element_count) if record_visibility else None
 
     def shoot(self, shooter: Shooter, visibility_map: VisibilityMap) -> None:
@@ -173,6 +176,7 @@ class Gatherer:
         if self.visibility is not None:
             self.visibility.bind_to_storage_buffer(5)
         visibility_map.items.use(0)
+        visibility_map.distances.use(1)
         self.textures.radiosity.bind_to_image(0, read=True, write=True)
         self.textures.residual.bind_to_image(1, read=True, write=True, level=0)
         self.ctx.memory_barrier()
