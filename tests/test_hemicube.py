@@ -65,10 +65,15 @@ def test_closed_cube_rows_sum_to_one(ctx):
 
 @pytest.mark.parametrize("solver", SOLVERS)
 @pytest.mark.parametrize("reflectance", [0.5, 0.9])
-def test_furnace(ctx, solver, reflectance):
+@pytest.mark.parametrize("skip_unneeded", [False, True], ids=["hemicubes", "analysed"])
+def test_furnace(ctx, solver, reflectance, skip_unneeded):
+    """Closed cube, uniform ρ and E: B = E/(1 − ρ). Analysed, the convex grey cube is solved
+    with analytic unoccluded form factors on one channel; with skips off, by hemi-cubes."""
     scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
-    settings = SolveSettings(method="hemicube", subdiv=3, hemicube_res=64, solver=solver, tolerance=1e-6)
+    settings = SolveSettings(method="hemicube", subdiv=3, hemicube_res=64, solver=solver, tolerance=1e-6,
+                             skip_unneeded=skip_unneeded)
     solution = solve(scene, settings, ctx=ctx)
+    assert solution.report["effects"]["hemicubes"] == (0 if skip_unneeded else 54)
     np.testing.assert_allclose(solution.patch_radiosity, 1 / (1 - reflectance), rtol=0.01)
 
 
