@@ -14,7 +14,8 @@ Per object (DESIGN.md, Lightmaps):
    value per patch) are the case S = 1.
 4. The GPU rasterizes every patch's footprint into the atlas
    (`lightmap_texel_radiosity.frag`): texel centres inside a footprint get its
-   interpolated value, texels it only grazes get its nearest values too.
+   interpolated value; a texel footprints only graze takes the value of the
+   nearest footprint at its nearest point.
 5. Gutters are dilated from the inside (`padding.dilate`) and the mip chain is
    coverage-aware (`padding.downsample_covered`), each level dilated again.
 
