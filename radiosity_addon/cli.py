@@ -158,7 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
     images.add_argument("--preview-size", type=int, default=512, metavar="N",
                         help="preview width and height in pixels (default 512)")
     images.add_argument("--exposure", type=float, default=None,
-                        help="preview exposure (default: the 99th percentile of lit surfaces maps to white)")
+                        help="preview exposure (default: lit surfaces just reach white, emitters clip)")
     solve_parser.set_defaults(handler=command_solve)
     return parser
 

@@ -17,7 +17,7 @@ Per object (DESIGN.md, Lightmaps):
    interpolated value; a texel footprints only graze takes the value of the
    nearest footprint at its nearest point.
 5. Gutters are dilated from the inside (`padding.dilate`) and the mip chain is
-   coverage-aware (`padding.downsample_covered`), each level dilated again.
+   coverage-aware (`padding.downsample_weighted`), each level dilated again.
 
 Images are float32 linear radiance, RGBA, row 0 at v = 0 (the bottom), the
 order of Blender's `image.pixels` and of OpenGL textures. Alpha is coverage:
@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import gl, uv_layout
-from .padding import dilate, downsample_covered
+from .padding import dilate, downsample_weighted
 from .patches import bilinear
 from .scene import Scene, SceneError
 from .solution import Solution, SolveError
@@ -49,6 +49,7 @@ UV_TOLERANCE = 1e-3  # how far given UVs may stray outside [0, 1]
 class Lightmap:
     object_name: str
     levels: list[np.ndarray]  # mip chain, (h_k, w_k, 4) float32; levels[0] is the image
+    coverage: list[np.ndarray]  # per level, (h_k, w_k) float32: fraction of the texel on charts (alpha adds gutters)
     patch_index: np.ndarray  # (H, W) int32: patch whose footprint holds the texel centre, -1 if none
     surface_uv: dict[int, np.ndarray]  # surface index -> (k, 2) vertex UVs the map was baked with
     texel_density: float  # achieved texels per scene unit: sqrt(texels inside faces / face area)
@@ -212,18 +213,20 @@ def _rasterize(ctx, corners_texels: np.ndarray, lattice: np.ndarray, size: tuple
     return values.reshape(height, width, 4)[..., :3], ids.reshape(height, width)
 
 
-def mip_chain(values: np.ndarray, covered: np.ndarray, gutter: int) -> list[np.ndarray]:
-    """RGBA float32 levels: each downsampled from the previous level's charts (not its gutter),
-    then dilated by `gutter` texels; the chain ends at the first odd size (GL halves sizes by
-    floor(w / 2), the coverage-aware mean by 2 x 2 blocks: they agree while sizes are even)."""
-    levels = []
+def mip_chain(values: np.ndarray, coverage: np.ndarray, gutter: int) -> tuple[list, list]:
+    """RGBA float32 levels and their chart coverage: each level is the coverage-weighted 2x2 mean
+    of the previous level's chart texels (not its gutter), so every level's coverage-weighted
+    mean is level 0's; then it is dilated by `gutter` texels. The chain ends at the first odd
+    size (GL halves sizes by floor(w / 2), this by 2 x 2 blocks: they agree while sizes are even)."""
+    levels, coverages = [], []
     while True:
-        filled, reached = dilate(values, covered, gutter)
+        filled, reached = dilate(values, coverage > 0, gutter)
         levels.append(np.concatenate([filled, reached[..., None]], axis=2).astype(np.float32))
-        h, w = covered.shape
+        coverages.append(coverage.astype(np.float32))
+        h, w = coverage.shape
         if max(h, w) == 1 or (h > 1 and h % 2) or (w > 1 and w % 2):
-            return levels
-        values, covered = downsample_covered(values, covered)  # a 1-texel axis stays 1
+            return levels, coverages
+        values, coverage = downsample_weighted(values, coverage)  # a 1-texel axis stays 1
 
 
 def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXEL_DENSITY,
@@ -279,7 +282,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
             covered = signed_ids != 0
             inside = signed_ids > 0
             patch_index = np.where(inside, mine[np.maximum(signed_ids, 1) - 1], -1).astype(np.int32)
-            if not inside.any():
+            if not covered.any():
                 raise SolveError(f"object '{name}': its faces cover no texel of a {size[0]}x{size[1]}"
                                  " lightmap; raise the texel density or its resolution")
             if layout is None:
@@ -287,9 +290,11 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
             else:
                 surface_uv = {i: layout.surface_uv(i, scene.surfaces[i].vertices) for i in indices}
             area = sum(scene.surfaces[i].area for i in indices)
+            levels, coverage = mip_chain(texel_values.astype(np.float64), covered.astype(np.float64), gutter)
             lightmaps[name] = Lightmap(
                 object_name=name,
-                levels=mip_chain(texel_values.astype(np.float64), covered, gutter),
+                levels=levels,
+                coverage=coverage,
                 patch_index=patch_index,
                 surface_uv=surface_uv,
                 texel_density=math.sqrt(inside.sum() / area),

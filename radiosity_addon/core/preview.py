@@ -7,8 +7,10 @@ The picture is rendered `supersample` times larger and box-filtered down.
 
 Tone map (the PNG): `srgb(clamp(radiance × exposure, 0, 1))`, with sRGB's
 piecewise encoding and rounding to 8 bits. Without an explicit exposure, it
-is chosen so that the 99th percentile of the luminance (Rec. 709 weights) of
-non-emitting surfaces maps to 1: lit walls fill the range and emitters clip.
+is chosen so that the 99.9th percentile of the largest colour channel of
+non-emitting surfaces maps to 1: lit surfaces fill the range without clipping
+(clipping one channel would shift their hue, and with it the colour bleeding
+the picture is meant to show), while emitters clip to white-ish.
 
 PNGs are written with zlib and struct only (no imaging library in the core).
 """
@@ -27,7 +29,7 @@ from . import gl
 from .scene import Scene, SceneError
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
-EXPOSURE_PERCENTILE = 99.0
+EXPOSURE_PERCENTILE = 99.9
 
 
 @dataclass
@@ -168,11 +170,11 @@ def render_preview(scene: Scene, lightmaps: dict, camera: Camera | None = None, 
 
 
 def auto_exposure(scene: Scene, preview: Preview) -> float:
-    """Exposure mapping the EXPOSURE_PERCENTILE luminance of non-emitting surfaces to 1."""
+    """Exposure mapping the EXPOSURE_PERCENTILE of non-emitting surfaces' largest channel to 1."""
     emitting = np.array([bool(np.any(s.emission > 0)) for s in scene.surfaces] + [True])  # [-1]: background
     lit = ~emitting[preview.surface_index]
-    luminance = preview.radiance[lit] @ LUMINANCE
-    reference = np.percentile(luminance, EXPOSURE_PERCENTILE) if luminance.size else 0.0
+    brightest_channel = preview.radiance[lit].max(axis=-1)
+    reference = np.percentile(brightest_channel, EXPOSURE_PERCENTILE) if brightest_channel.size else 0.0
     return 1.0 / reference if reference > 0 else 1.0
 
 
