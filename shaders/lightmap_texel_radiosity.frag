@@ -83,6 +83,7 @@ void main() {
 
     float twice_area = 0.0;
     for (int k = 0; k < 4; ++k) twice_area += cross2(c[k], c[(k + 1) % 4]);
+    if (abs(twice_area) < 1e-8) discard;  // a face collapsed in UV space owns no texel (and has no inverse)
     float orientation = twice_area >= 0.0 ? 1.0 : -1.0;  // mirrored UVs wind clockwise
 
     // Largest signed distance of the centre outside an edge, and the separating-axis

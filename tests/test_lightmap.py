@@ -313,6 +313,16 @@ def test_given_uvs_are_used_and_mixed_uvs_refused(gl_ctx):
         bake_lightmaps(scene_from_dict(mixed), solution, ctx=gl_ctx)
 
 
+def test_a_face_collapsed_in_uv_space_leaves_no_nan(gl_ctx):
+    collapsed = {"surfaces": [TWO_TILES["surfaces"][0],
+                              {**TWO_TILES["surfaces"][1], "uv": [[0.7, 0.8]] * 4}]}
+    scene = scene_from_dict(collapsed)
+    solution = synthetic_element_solution(scene, 2, 2, lambda c, s: np.ones(c.shape))
+    lightmap = bake_lightmaps(scene, solution, texel_density=50, ctx=gl_ctx)["tiles"]
+    assert np.isfinite(lightmap.rgba).all()
+    assert np.allclose(lightmap.rgba[lightmap.rgba[..., 3] > 0][:, :3], 1.0, atol=1e-5)
+
+
 # --- preview -------------------------------------------------------------------------------
 
 def test_cornell_preview_shows_colour_bleeding_and_the_light_is_brightest(cornell, cornell_bakes, gl_ctx,

@@ -27,6 +27,7 @@ order of Blender's `image.pixels` and of OpenGL textures. Alpha is coverage:
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,10 +66,13 @@ class Lightmap:
 
 
 def element_values(solution: Solution) -> np.ndarray:
-    """(P, S, S, 3) radiosity: the elements, or the patch values as S = 1."""
+    """(P, S, S, 3) radiosity: the elements, or the patch values as S = 1 (a grey one-channel
+    result is repeated into three)."""
     if solution.element_radiosity is not None:
-        return np.asarray(solution.element_radiosity, dtype=np.float64)
-    return np.asarray(solution.patch_radiosity, dtype=np.float64)[:, None, None, :]
+        values = np.asarray(solution.element_radiosity, dtype=np.float64)
+    else:
+        values = np.asarray(solution.patch_radiosity, dtype=np.float64)[:, None, None, :]
+    return np.broadcast_to(values, values.shape[:3] + (3,)) if values.shape[3] == 1 else values
 
 
 def lattice_parameters(elements: int) -> np.ndarray:
@@ -122,8 +126,12 @@ def resolve_size(natural: tuple[int, int], override, max_size: int, power_of_two
                  object_name: str) -> tuple[int, int]:
     """Final (width, height): the override or the natural size, rounded and capped."""
     if override is not None:
-        size = (override, override) if isinstance(override, (int, np.integer)) else tuple(override)
-        if len(size) != 2 or any(int(n) != n or n < MIN_SIZE for n in size):
+        try:
+            size = (override, override) if isinstance(override, numbers.Real) else tuple(override)
+            valid = len(size) == 2 and all(int(n) == n >= MIN_SIZE for n in size)
+        except (TypeError, ValueError):
+            valid = False
+        if not valid:
             raise SolveError(f"object '{object_name}': lightmap resolution {override!r} must be an integer"
                              f" (or width, height) of at least {MIN_SIZE}")
         size = tuple(int(n) for n in size)
@@ -198,15 +206,13 @@ def _rasterize(ctx, corners_texels: np.ndarray, lattice: np.ndarray, size: tuple
         fbo.use()
         fbo.viewport = (0, 0, width, height)
         fbo.clear(depth=1.0)
-        ctx.disable(ctx.CULL_FACE | ctx.BLEND)
-        ctx.enable(ctx.DEPTH_TEST)
+        ctx.enable_only(ctx.DEPTH_TEST)  # no culling: mirrored UV charts wind clockwise
         ctx.depth_func = "<"
         corner_buffer.bind_to_storage_buffer(0)
         lattice_buffer.bind_to_storage_buffer(1)
         vao.render()
         values = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=0), dtype=np.float32)
         ids = np.frombuffer(fbo.read(components=1, dtype="i4", attachment=1), dtype=np.int32)
-        ctx.disable(ctx.DEPTH_TEST)
     finally:
         for resource in reversed(resources):
             resource.release()
@@ -249,8 +255,10 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
     scene_size = max(scene.diameter, 1e-30)
     pad = gutter + 1  # a chart's grazed texels, then its gutter
 
-    layouts, patch_uv = {}, np.array(patches.uv, dtype=np.float64)
+    layouts = {}
     object_of_surface = np.empty(len(scene.surfaces), dtype=np.int64)
+    laid_out = np.zeros(len(scene.surfaces), dtype=bool)  # surfaces given automatic UVs here
+    uv_maps = np.zeros((len(scene.surfaces), 2, 4))  # their affine maps: uv = M @ [x, y, z, 1]
     for number, (name, indices) in enumerate(objects.items()):
         object_of_surface[indices] = number
         if _given_uvs(scene, name, indices):
@@ -265,10 +273,14 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
             size = resolve_size(natural, overrides.get(name), max_size, power_of_two, name)
             scale = uv_layout.largest_fitting_scale(charts, size, pad, name)
             layout = uv_layout.place_charts(charts, size, scale, pad)
-            for i in indices:
-                on_surface = patches.surface == i
-                patch_uv[on_surface] = layout.surface_uv(i, patches.corners[on_surface])
+            laid_out[indices] = True
+            uv_maps[indices] = [layout.uv_maps[i] for i in indices]
             layouts[name] = (size, layout)
+
+    patch_uv = np.array(patches.uv, dtype=np.float64)
+    auto = laid_out[patches.surface]
+    maps = uv_maps[patches.surface[auto]]
+    patch_uv[auto] = np.einsum("pij,pkj->pki", maps[..., :3], patches.corners[auto]) + maps[:, None, :, 3]
 
     lattice = continuous_lattice(patches.corners, patch_uv, values, object_of_surface[patches.surface],
                                  world_quantum=1e-6 * scene_size, uv_quantum=1e-6)

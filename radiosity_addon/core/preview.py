@@ -144,7 +144,7 @@ def render_preview(scene: Scene, lightmaps: dict, camera: Camera | None = None, 
             fbo.use()
             fbo.viewport = (0, 0, big_w, big_h)
             fbo.clear(depth=1.0)
-            gl_ctx.enable(gl_ctx.DEPTH_TEST | gl_ctx.CULL_FACE)
+            gl_ctx.enable_only(gl_ctx.DEPTH_TEST | gl_ctx.CULL_FACE)  # only fronts emit and receive
             gl_ctx.front_face = "ccw"
             gl_ctx.depth_func = "<"
             for name, vertices in _surface_triangles(scene, lightmaps).items():
@@ -157,7 +157,6 @@ def render_preview(scene: Scene, lightmaps: dict, camera: Camera | None = None, 
                     resource.release()
             radiance = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=0), dtype=np.float32)
             ids = np.frombuffer(fbo.read(components=1, dtype="i4", attachment=1), dtype=np.int32)
-            gl_ctx.disable(gl_ctx.DEPTH_TEST | gl_ctx.CULL_FACE)
         finally:
             for resource in reversed(resources):
                 resource.release()
