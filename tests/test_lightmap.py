@@ -240,6 +240,53 @@ def own_element_values(solution, lightmap):
     return solution.element_radiosity[patch, j, i]
 
 
+TWO_ISLANDS = {"surfaces": [  # the same two quads, each its own UV island (as Blender's Lightmap Pack does)
+    {**TWO_TILES["surfaces"][0], "uv": [[0.05, 0.3], [0.48, 0.3], [0.48, 0.73], [0.05, 0.73]]},
+    {**TWO_TILES["surfaces"][1], "uv": [[0.52, 0.3], [0.95, 0.3], [0.95, 0.73], [0.52, 0.73]]},
+]}
+
+
+def test_values_are_continuous_across_a_flat_edge_between_uv_islands(gl_ctx):
+    """Each face its own island: the texels nearest the shared edge on either island (half a texel
+    from it, edges on texel borders at 200 x 200) differ no more than neighbouring texels allow,
+    as across a border inside a chart (see the test above)."""
+    scene = scene_from_dict(TWO_ISLANDS)
+    rng = np.random.default_rng(5)
+    solution = synthetic_element_solution(scene, subdiv=2, elements=4,
+                                          values=lambda c, s: rng.uniform(0.1, 1.0, c.shape))
+    lightmap = bake_lightmaps(scene, solution, resolution_overrides={"tiles": 200}, ctx=gl_ctx)["tiles"]
+    value = lightmap.rgba[..., :3].astype(np.float64)
+    rows = np.arange(61, 145)  # v in (0.305, 0.725): inside both islands
+    a, a2, b, b2 = value[rows, 95], value[rows, 94], value[rows, 104], value[rows, 105]
+    assert (lightmap.patch_index[rows, 95] >= 0).all() and (lightmap.patch_index[rows, 104] >= 0).all()
+    step = np.abs(b - a).max(axis=1)
+    bound = 1.25 * np.maximum(np.abs(a - a2), np.abs(b2 - b)).max(axis=1) + 1e-4
+    assert (step <= bound).all(), f"{np.count_nonzero(step > bound)} rows step across the edge"
+
+
+@pytest.mark.parametrize("bend_degrees, averaged", [(90.0, False), (20.0, True)])
+def test_creases_keep_their_own_values_and_smooth_bends_share_them(gl_ctx, bend_degrees, averaged):
+    """A floor (value 1) and a wall (value 3) of one object meeting at an edge: at a 90° crease
+    each keeps its own value (light really differs there); bent by only 20° they meet halfway."""
+    bend = np.radians(bend_degrees)
+    top = [1 + np.cos(bend), np.sin(bend), 0]  # the second face rises from the edge x = 1
+    scene = scene_from_dict({"surfaces": [
+        {"name": "floor", "object": "bent", "vertices": [[0, 0, 0], [1, 0, 0], [1, 0, -1], [0, 0, -1]],
+         "reflectance": [0.5] * 3, "emission": [1, 1, 1]},
+        {"name": "wall", "object": "bent", "vertices": [[1, 0, 0], top, [top[0], top[1], -1], [1, 0, -1]],
+         "reflectance": [0.5] * 3, "emission": [0, 0, 0]},
+    ]})
+    solution = synthetic_element_solution(scene, 2, 2, lambda c, s: np.ones(c.shape) * (1 + 2 * s)[:, None, None, None])
+    lightmap = bake_lightmaps(scene, solution, texel_density=40, ctx=gl_ctx)["bent"]
+    inside = lightmap.patch_index >= 0
+    surface = solution.patches.surface[lightmap.patch_index[inside]]
+    values = lightmap.rgba[inside][:, 0]
+    if averaged:
+        assert values[surface == 0].max() > 1.5 and values[surface == 1].min() < 2.5
+    else:
+        assert np.allclose(values[surface == 0], 1.0) and np.allclose(values[surface == 1], 3.0)
+
+
 def test_lattice_border_points_sit_on_patch_edges():
     params = lattice_parameters(4)
     assert params[0] == 0 and params[-1] == 1 and np.allclose(params[1:-1], [0.125, 0.375, 0.625, 0.875])

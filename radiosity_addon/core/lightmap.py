@@ -8,9 +8,10 @@ Per object (DESIGN.md, Lightmaps):
    object has none, an automatic layout (`uv_layout`).
 3. Values: every patch carries a lattice of its element centres plus border
    points on its edges and corners; a border point's value is the mean of the
-   values the patches meeting there give it (same object, same world point,
-   same UV point — that is, the same chart), so bilinear interpolation over the
-   lattice is continuous across patch and face borders. Hemi-cube results (one
+   values the patches meeting there give it (same object and world point, and
+   the same UV point or a bend under 30°), so bilinear interpolation over the
+   lattice is continuous across patch borders, across face borders within a
+   chart, and across smooth edges between charts. Hemi-cube results (one
    value per patch) are the case S = 1.
 4. The GPU rasterizes every patch's footprint into the atlas
    (`lightmap_texel_radiosity.frag`): texel centres inside a footprint get its
@@ -44,6 +45,7 @@ GUTTER = 2  # texels dilated around every chart, at every mip level
 SIZE_MULTIPLE = 8  # sizes round up to this so levels 1-3 halve exactly, as GL's floor(w / 2) does
 MIN_SIZE = 8
 UV_TOLERANCE = 1e-3  # how far given UVs may stray outside [0, 1]
+SMOOTH_EDGE_DEGREES = 30.0  # faces meeting flatter than this share values at their edge (Blender's auto smooth)
 
 
 @dataclass
@@ -80,16 +82,40 @@ def lattice_parameters(elements: int) -> np.ndarray:
     return np.concatenate([[0.0], (np.arange(elements) + 0.5) / elements, [1.0]])
 
 
-def continuous_lattice(corners: np.ndarray, patch_uv: np.ndarray, values: np.ndarray,
-                       group: np.ndarray, world_quantum: float, uv_quantum: float) -> np.ndarray:
+def _sum_within_groups(group: np.ndarray, joins, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For every item i, the sum of values[j] and the count over the items j of its group with
+    joins(i, j) true (each item joins itself). Items are compared at every offset within their
+    group: a loop over the largest group size (a handful), vectorized over all items."""
+    order = np.argsort(group, kind="stable")
+    sorted_group = group[order]
+    total, count = values.copy(), np.ones(len(group))
+    for offset in range(1, len(group)):
+        same = sorted_group[offset:] == sorted_group[:-offset]
+        if not same.any():
+            break
+        i, j = order[:-offset][same], order[offset:][same]
+        joined = joins(i, j)
+        i, j = i[joined], j[joined]
+        np.add.at(total, i, values[j])
+        np.add.at(total, j, values[i])
+        np.add.at(count, i, 1)
+        np.add.at(count, j, 1)
+    return total, count
+
+
+def continuous_lattice(corners: np.ndarray, patch_uv: np.ndarray, values: np.ndarray, group: np.ndarray,
+                       normals: np.ndarray, world_quantum: float, uv_quantum: float) -> np.ndarray:
     """(P, S+2, S+2, 3) lattice values [patch, t row, s column].
 
-    Inside: the element values. Border points: each patch first proposes its
-    nearest element's value (averaged over its own lattice points at the same
-    place, e.g. along a triangle's collapsed edge), then every place takes the
-    mean of the proposals of the patches meeting there. Places are matched by
-    quantized world position, UV position and `group` (the object), so values
-    are shared exactly where the images are continuous: within a chart."""
+    Inside: the element values. Border points: each patch proposes its nearest
+    element's value there (one proposal per patch and place: its own lattice
+    points at one place, e.g. along a triangle's collapsed edge, are averaged
+    first); then a patch's border value is the mean of the proposals of the
+    patches of its `group` (object) at the same world point that either share
+    the UV point there (same chart: the image must be continuous) or bend
+    from it by less than SMOOTH_EDGE_DEGREES (a smooth surface split into
+    faces, e.g. Blender's Lightmap Pack making each face its own chart: no
+    seams between them). Creases keep their own values: light differs there."""
     count, elements = values.shape[:2]
     clamp = np.clip(np.arange(elements + 2) - 1, 0, elements - 1)
     lattice = values[:, clamp][:, :, clamp].copy()
@@ -97,28 +123,31 @@ def continuous_lattice(corners: np.ndarray, patch_uv: np.ndarray, values: np.nda
     s, t = np.meshgrid(params, params)  # [t row, s column]
     border = np.ones_like(s, dtype=bool)
     border[1:-1, 1:-1] = False
-    world = bilinear(corners, s[border], t[border])  # (P, B, 3)
-    uv = bilinear(patch_uv, s[border], t[border])
-    per_point = border.sum()
-    keys = np.concatenate([
-        np.repeat(group, per_point)[:, None],
-        np.round(world.reshape(-1, 3) / world_quantum),
-        np.round(uv.reshape(-1, 2) / uv_quantum),
-    ], axis=1).astype(np.int64)
-    _, place = np.unique(keys, axis=0, return_inverse=True)
+    per_patch = int(border.sum())
+    world = np.round(bilinear(corners, s[border], t[border]).reshape(-1, 3) / world_quantum)
+    uv = np.round(bilinear(patch_uv, s[border], t[border]).reshape(-1, 2) / uv_quantum)
+    owner = np.repeat(np.arange(count), per_patch)
+    keys = np.concatenate([group[owner][:, None], world, uv], axis=1).astype(np.int64)
+    _, place = np.unique(keys, axis=0, return_inverse=True)  # same object, world and UV point
     place = place.ravel()
-    places = place.max() + 1
+    _, pair_of_point = np.unique(owner * (place.max() + 1) + place, return_inverse=True)
+    pair_of_point = pair_of_point.ravel()
+    points_per_pair = np.bincount(pair_of_point)
     proposals = lattice[:, border].reshape(-1, 3)
-    owner = np.repeat(np.arange(count), per_point)
-    pairs, pair_of_point = np.unique(owner * places + place, return_inverse=True)
-    pair_weight = np.bincount(pair_of_point)
     pair_value = np.stack([np.bincount(pair_of_point, proposals[:, c]) for c in range(3)], axis=1)
-    pair_value /= pair_weight[:, None]
-    place_of_pair = pairs % places
-    place_count = np.bincount(place_of_pair, minlength=places)
-    place_value = np.stack([np.bincount(place_of_pair, pair_value[:, c], minlength=places) for c in range(3)], axis=1)
-    place_value /= np.maximum(place_count, 1)[:, None]
-    lattice[:, border] = place_value[place].reshape(count, per_point, 3)
+    pair_value /= points_per_pair[:, None]
+    first = np.zeros(len(points_per_pair), dtype=np.int64)
+    first[pair_of_point[::-1]] = np.arange(len(pair_of_point))[::-1]  # a point of each pair
+    pair_patch, pair_place = owner[first], place[first]
+    _, pair_world = np.unique(keys[first, :4], axis=0, return_inverse=True)  # object and world point
+    smooth = math.cos(math.radians(SMOOTH_EDGE_DEGREES))
+
+    def joins(i, j):
+        return (pair_place[i] == pair_place[j]) | (
+            np.einsum("ij,ij->i", normals[pair_patch[i]], normals[pair_patch[j]]) > smooth)
+
+    total, joined = _sum_within_groups(pair_world.ravel(), joins, pair_value)
+    lattice[:, border] = (total / joined[:, None])[pair_of_point].reshape(count, per_patch, 3)
     return lattice
 
 
@@ -283,7 +312,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
     patch_uv[auto] = np.einsum("pij,pkj->pki", maps[..., :3], patches.corners[auto]) + maps[:, None, :, 3]
 
     lattice = continuous_lattice(patches.corners, patch_uv, values, object_of_surface[patches.surface],
-                                 world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
+                                 patches.normal, world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
     lightmaps = {}
     with gl.gl_context(ctx) as gl_ctx:
         for name, indices in objects.items():
