@@ -89,6 +89,8 @@ def command_solve(args) -> int:
     scene = load_scene(args.scene)
     settings = settings_from_args(args)
     wants_images = bool(args.lightmaps or args.preview)
+    if wants_images:
+        check_image_options(args)
     with gl_context() if wants_images else contextlib.nullcontext() as ctx:
         solution = solve(scene, settings, progress=print_progress(args.quiet), ctx=ctx)
         PROGRESS.end()
@@ -107,6 +109,16 @@ def command_solve(args) -> int:
     return 0
 
 
+def check_image_options(args) -> None:
+    """Refuse bad lightmap/preview options before the solve, not after it."""
+    if not args.texel_density > 0:
+        raise SolveError(f"--texel-density must be positive, got {args.texel_density}")
+    if args.preview and args.preview_size < 8:
+        raise SolveError(f"--preview-size must be at least 8 pixels, got {args.preview_size}")
+    if args.exposure is not None and not args.exposure > 0:
+        raise SolveError(f"--exposure must be positive, got {args.exposure}")
+
+
 def write_lightmaps_and_preview(args, scene, solution, ctx) -> None:
     """`solve --lightmaps DIR` / `--preview OUT.png`: bake the lightmaps, write them and the picture."""
     import numpy as np
@@ -115,7 +127,7 @@ def write_lightmaps_and_preview(args, scene, solution, ctx) -> None:
     from .core.preview import render_preview, save_preview
 
     lightmaps = bake_lightmaps(scene, solution, texel_density=args.texel_density,
-                               max_size=args.lightmap_max_size, ctx=ctx)
+                               max_size=args.max_lightmap_size, ctx=ctx)
     if args.lightmaps:
         directory = Path(args.lightmaps)
         directory.mkdir(parents=True, exist_ok=True)
@@ -151,7 +163,7 @@ def build_parser() -> argparse.ArgumentParser:
                              " linear radiance, alpha = coverage, row 0 at v = 0")
     images.add_argument("--texel-density", type=float, default=TEXEL_DENSITY, metavar="D",
                         help=f"lightmap texels per scene unit (default {TEXEL_DENSITY:g})")
-    images.add_argument("--lightmap-max-size", type=int, default=MAX_SIZE, metavar="N",
+    images.add_argument("--max-lightmap-size", type=int, default=MAX_SIZE, metavar="N",
                         help=f"cap on a lightmap's width and height (default {MAX_SIZE})")
     images.add_argument("--preview", metavar="OUT.png",
                         help="render the scene with its lightmaps from its camera into a PNG")

@@ -17,11 +17,12 @@ from radiosity_addon.core.lightmap import (GUTTER, MIN_SIZE, bake_lightmaps, lat
                                            resolve_size)
 from radiosity_addon.core.padding import dilate
 from radiosity_addon.core.patches import bilinear, subdivide
-from radiosity_addon.core.preview import LUMINANCE, render_preview, save_preview
+from radiosity_addon.core.preview import render_preview, save_preview
 from radiosity_addon.core.scene import SceneError, load_scene, scene_from_dict
 from radiosity_addon.core.solution import Solution, SolveError, SolveSettings
 from radiosity_addon.core.solve import solve
 
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec. 709
 CORNELL_DENSITY = 128.0  # texels per metre: 7.8 mm texels, the library default
 FINE_DENSITY = 256.0  # the demo's density: the smallest Cornell faces (block sides) ~41 texels across
 

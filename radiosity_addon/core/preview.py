@@ -28,7 +28,6 @@ import numpy as np
 from . import gl
 from .scene import Scene, SceneError
 
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 EXPOSURE_PERCENTILE = 99.9
 
 
