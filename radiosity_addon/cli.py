@@ -80,35 +80,6 @@ def print_progress(quiet: bool):
     return None if quiet else PROGRESS
 
 
-def command_solve(args) -> int:
-    import numpy as np
-
-    from .core.scene import load_scene
-    from .core.solve import solve
-
-    scene = load_scene(args.scene)
-    settings = settings_from_args(args)
-    wants_images = bool(args.lightmaps or args.preview)
-    if wants_images:
-        check_image_options(args)
-    with gl_context() if wants_images else contextlib.nullcontext() as ctx:
-        solution = solve(scene, settings, progress=print_progress(args.quiet), ctx=ctx)
-        PROGRESS.end()
-        if wants_images:
-            write_lightmaps_and_preview(args, scene, solution, ctx)
-    report = solution.report
-    if args.output:
-        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-        np.savez_compressed(args.output, **solution.npz_arrays())
-    if args.report:
-        Path(args.report).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.report).write_text(json.dumps(report, indent=2))
-    counts, timings = report["counts"], report["timings"]
-    print(f"{report['method']}: {counts['patches']} patches, {counts['elements']} elements,"
-          f" {timings['total']:.2f} s ({', '.join(f'{k} {v:.2f}' for k, v in timings.items() if k != 'total')})")
-    return 0
-
-
 def check_image_options(args) -> None:
     """Refuse bad lightmap/preview options before the solve, not after it."""
     if not args.texel_density > 0:
@@ -144,6 +115,35 @@ def write_lightmaps_and_preview(args, scene, solution, ctx) -> None:
 def safe_file_name(name: str) -> str:
     """An object name usable as a file name (path separators and the like become '_')."""
     return "".join(c if c.isalnum() or c in "-_. " else "_" for c in name).strip() or "object"
+
+
+def command_solve(args) -> int:
+    import numpy as np
+
+    from .core.scene import load_scene
+    from .core.solve import solve
+
+    scene = load_scene(args.scene)
+    settings = settings_from_args(args)
+    wants_images = bool(args.lightmaps or args.preview)
+    if wants_images:
+        check_image_options(args)
+    with gl_context() if wants_images else contextlib.nullcontext() as ctx:
+        solution = solve(scene, settings, progress=print_progress(args.quiet), ctx=ctx)
+        PROGRESS.end()
+        if wants_images:
+            write_lightmaps_and_preview(args, scene, solution, ctx)
+    report = solution.report
+    if args.output:
+        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(args.output, **solution.npz_arrays())
+    if args.report:
+        Path(args.report).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.report).write_text(json.dumps(report, indent=2))
+    counts, timings = report["counts"], report["timings"]
+    print(f"{report['method']}: {counts['patches']} patches, {counts['elements']} elements,"
+          f" {timings['total']:.2f} s ({', '.join(f'{k} {v:.2f}' for k, v in timings.items() if k != 'total')})")
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
