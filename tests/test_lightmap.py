@@ -344,8 +344,20 @@ def test_resolution_follows_density_override_cap_and_power_of_two(cornell, corne
     assert maps["floor"].size == (128, 128) and maps["light"].size == (32, 16)
     for name in ("back_wall", "tall_block"):  # at least the density asked for; rounding sizes up adds some
         assert 0.98 * 64 < maps[name].texel_density < 1.25 * 64
-    with pytest.raises(SolveError, match="not an object"):
+    with pytest.raises(SolveError, match="no object 'nope'"):
         bake_lightmaps(cornell, cornell_solution, resolution_overrides={"nope": 64}, ctx=gl_ctx)
+    with pytest.raises(SolveError, match="do not fit"):  # five charts with their margins need more than 8 x 8
+        bake_lightmaps(cornell, cornell_solution, resolution_overrides={"tall_block": 8}, ctx=gl_ctx)
+
+
+def test_only_the_objects_asked_for_are_baked(cornell, cornell_solution, gl_ctx):
+    """Objects that only occlude (a Blender bake of selected objects) need no lightmap."""
+    maps = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, objects=["floor", "light"], ctx=gl_ctx)
+    assert sorted(maps) == ["floor", "light"]
+    everything = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, ctx=gl_ctx)
+    assert np.array_equal(maps["floor"].rgba, everything["floor"].rgba)
+    with pytest.raises(SolveError, match="no object 'nope'"):
+        bake_lightmaps(cornell, cornell_solution, objects=["floor", "nope"], ctx=gl_ctx)
 
 
 def test_given_uvs_are_used_and_mixed_uvs_refused(gl_ctx):

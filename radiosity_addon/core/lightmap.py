@@ -266,17 +266,21 @@ def mip_chain(values: np.ndarray, coverage: np.ndarray, gutter: int) -> tuple[li
 
 def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXEL_DENSITY,
                    resolution_overrides: dict | None = None, max_size: int = MAX_SIZE,
-                   power_of_two: bool = False, ctx=None, gutter: int = GUTTER) -> dict[str, Lightmap]:
-    """One `Lightmap` per object of `scene`, keyed by object name (see the module doc)."""
+                   power_of_two: bool = False, ctx=None, gutter: int = GUTTER,
+                   objects=None) -> dict[str, Lightmap]:
+    """One `Lightmap` per object of `scene` (or of `objects`, names of some of them: objects
+    that only occlude need none), keyed by object name (see the module doc)."""
     if not texel_density > 0:
         raise SolveError(f"texel density must be positive, got {texel_density}")
     if max_size < MIN_SIZE:
         raise SolveError(f"the lightmap size cap must be at least {MIN_SIZE}, got {max_size}")
-    objects = _object_surfaces(scene)
+    all_objects = _object_surfaces(scene)
     overrides = dict(resolution_overrides or {})
-    unknown = sorted(set(overrides) - set(objects))
+    unknown = sorted((set(overrides) | set(objects or ())) - set(all_objects))
     if unknown:
-        raise SolveError(f"resolution override for '{unknown[0]}', which is not an object of the scene")
+        raise SolveError(f"no object '{unknown[0]}' in the scene to bake a lightmap for")
+    chosen = set(all_objects if objects is None else objects)
+    objects = {name: indices for name, indices in all_objects.items() if name in chosen}
     patches = solution.patches
     values = element_values(solution)
     if len(values) != len(patches):
@@ -285,7 +289,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
     pad = gutter + 1  # a chart's grazed texels, then its gutter
 
     layouts = {}
-    object_of_surface = np.empty(len(scene.surfaces), dtype=np.int64)
+    object_of_surface = np.full(len(scene.surfaces), -1, dtype=np.int64)  # -1: not baked
     laid_out = np.zeros(len(scene.surfaces), dtype=bool)  # surfaces given automatic UVs here
     uv_maps = np.zeros((len(scene.surfaces), 2, 4))  # their affine maps: uv = M @ [x, y, z, 1]
     for number, (name, indices) in enumerate(objects.items()):
@@ -311,8 +315,11 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
     maps = uv_maps[patches.surface[auto]]
     patch_uv[auto] = np.einsum("pij,pkj->pki", maps[..., :3], patches.corners[auto]) + maps[:, None, :, 3]
 
-    lattice = continuous_lattice(patches.corners, patch_uv, values, object_of_surface[patches.surface],
-                                 patches.normal, world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
+    group = object_of_surface[patches.surface]
+    baked = np.flatnonzero(group >= 0)
+    lattice = np.zeros((len(patches),) + (values.shape[1] + 2,) * 2 + (3,))
+    lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
+                                        patches.normal[baked], world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
     lightmaps = {}
     with gl.gl_context(ctx) as gl_ctx:
         for name, indices in objects.items():
