@@ -170,6 +170,8 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
         "kernel": settings.kernel,
         "elements_per_patch": settings.elements,
         "shots_per_second": shots / solve_seconds if solve_seconds > 0 else None,
+        # what was actually run (the report's effects; progressive applies no scene-analysis skips yet)
+        "work": {"visibility_maps": shots, "channels_solved": 3, "occlusion_tested": True},
     }
     return patch_radiosity, elements, details
 

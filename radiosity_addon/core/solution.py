@@ -39,6 +39,7 @@ class SolveSettings:
     visibility_res: int = 512  # progressive: pixels across the hemispherical visibility map
     shoot_from: str = "centroid"  # progressive: visibility map from the unshot power's centroid | centre
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
+    skip_unneeded: bool = True  # simulate only the effects the scene calls for (core/effects.py)
 
     @property
     def effective_tolerance(self) -> float:
