@@ -13,7 +13,7 @@ from radiosity_addon.core import gl
 from radiosity_addon.core.element_textures import ElementLayout, ElementTextures, element_areas, element_centers
 from radiosity_addon.core.padding import pad_tiles
 from radiosity_addon.core.patches import subdivide
-from radiosity_addon.core.raycast import point_polygon_form_factor
+from radiosity_addon.core.form_factor_kernels import point_to_clipped_polygon as point_polygon_form_factor
 from radiosity_addon.core.scene import load_scene, polygon_normal, scene_from_dict
 from radiosity_addon.core.shooting import Gatherer, PatchBuffers, Selector, patch_shooter
 from radiosity_addon.core.solution import SolveSettings

@@ -50,3 +50,36 @@ def unoccluded_form_factor_matrix(centers: np.ndarray, normals: np.ndarray, corn
         block[np.arange(len(chosen)), chosen] = 0.0  # a planar patch cannot see itself
         matrix[chosen] = block
     return matrix
+
+
+def point_to_clipped_polygon(points: np.ndarray, normals: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """(N,) differential-area-to-polygon form factors from points (N, 3) with unit normals (N, 3)
+    to one planar convex polygon (K, 3) whose front faces the points. Parts of the polygon behind
+    a point's tangent plane are clipped away first (Sutherland–Hodgman), so this also holds where
+    `point_to_polygon` does not. The CPU reference of the progressive method's exact GPU kernel
+    (shaders/shoot_to_elements.comp); a loop per point, for tests and tools."""
+    points, normals = np.atleast_2d(points), np.atleast_2d(normals)
+    result = np.zeros(len(points))
+    for n_index in range(len(points)):
+        x, n = points[n_index], normals[n_index]
+        rel = polygon - x
+        heights = rel @ n
+        clipped = []
+        for k in range(len(rel)):
+            a, b, da, db = rel[k], rel[(k + 1) % len(rel)], heights[k], heights[(k + 1) % len(rel)]
+            if da >= 0:
+                clipped.append(a)
+            if (da >= 0) != (db >= 0):
+                clipped.append(a + (b - a) * da / (da - db))
+        total = 0.0
+        for k in range(len(clipped)):
+            a, b = clipped[k], clipped[(k + 1) % len(clipped)]
+            la, lb = np.linalg.norm(a), np.linalg.norm(b)
+            if la < 1e-300 or lb < 1e-300:
+                continue
+            c = np.cross(a / la, b / lb)
+            lc = np.linalg.norm(c)
+            if lc > 1e-15:
+                total += np.arctan2(lc, np.dot(a, b) / (la * lb)) * np.dot(n, c) / lc
+        result[n_index] = max(-total, 0.0) / (2 * np.pi)
+    return result
