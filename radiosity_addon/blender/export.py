@@ -1,0 +1,168 @@
+"""Blender objects -> the core's Scene (world space, modifiers applied).
+
+Faces become surfaces of 3 or 4 vertices: triangles and planar convex quads as
+they are; n-gons and bent or concave quads through Blender's own triangulation.
+Degenerate faces are skipped (a warning counts them). Vertex order follows
+Blender's winding, which is the core's front convention; a mirroring object
+transform flips it back.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.scene import PLANARITY_TOLERANCE, Scene, SceneError, scene_from_dict
+from .errors import BakeError
+from .materials import MaterialReader
+from .tags import LIGHTMAP_UV
+
+DEGENERATE_AREA_FRACTION = 1e-10
+
+
+@dataclass
+class ExportedScene:
+    scene: Scene
+    baked_objects: list[str]  # objects that get a lightmap
+    warnings: list[str] = field(default_factory=list)
+
+
+def _foreach(collection, attribute: str, width: int, dtype) -> np.ndarray:
+    values = np.empty(len(collection) * width, dtype=dtype)
+    collection.foreach_get(attribute, values)
+    return values.reshape(-1, width) if width > 1 else values
+
+
+def _areas_and_bad_quads(corners: np.ndarray, quad: np.ndarray):
+    """Area of each face (k, 4, 3) (triangles repeat a corner) and whether a quad must be split."""
+    area_vector = 0.5 * np.cross(corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1])
+    area = np.linalg.norm(area_vector, axis=1)
+    size = np.ptp(corners, axis=1).max(axis=1)
+    normal = area_vector / np.maximum(area, 1e-300)[:, None]
+    off_plane = np.abs(np.einsum("kvc,kc->kv", corners - corners.mean(axis=1, keepdims=True), normal)).max(axis=1)
+    edges = np.roll(corners, -1, axis=1) - corners
+    turns = np.einsum("kvc,kc->kv", np.cross(edges, np.roll(edges, -1, axis=1)), normal)
+    bent = off_plane > 0.5 * PLANARITY_TOLERANCE * np.maximum(size, 1e-300)
+    concave = np.any(turns <= 1e-9 * size[:, None] ** 2, axis=1)
+    return area, size, quad & (bent | concave)
+
+
+class MeshExporter:
+    def __init__(self):
+        self.materials = MaterialReader()
+        self.warnings: list[str] = []
+        self.entries: list[dict] = []
+
+    def add(self, obj, obj_eval, with_lightmap_uv: bool) -> int:
+        """Append the faces of one evaluated object; returns how many surfaces it gave."""
+        mesh = obj_eval.to_mesh()
+        try:
+            return self._add_mesh(obj, obj_eval, mesh, with_lightmap_uv)
+        finally:
+            obj_eval.to_mesh_clear()
+
+    def _add_mesh(self, obj, obj_eval, mesh, with_lightmap_uv: bool) -> int:
+        if len(mesh.polygons) == 0:
+            if with_lightmap_uv:
+                raise BakeError(f"object '{obj.name}' has no faces to bake")
+            return 0
+        matrix = np.array(obj_eval.matrix_world, dtype=np.float64)
+        local = _foreach(mesh.vertices, "co", 3, np.float32).astype(np.float64)
+        positions = local @ matrix[:3, :3].T + matrix[:3, 3]
+        if not np.all(np.isfinite(positions)):
+            raise BakeError(f"object '{obj.name}' has vertices at NaN or infinite positions")
+        loop_vertex = _foreach(mesh.loops, "vertex_index", 1, np.int32)
+        uv = None
+        if with_lightmap_uv:
+            layer = mesh.uv_layers.get(LIGHTMAP_UV)
+            if layer is None:
+                raise BakeError(f"object '{obj.name}': its modifiers drop the '{LIGHTMAP_UV}' UV map;"
+                                f" apply them or give the result a '{LIGHTMAP_UV}' UV map")
+            uv = _foreach(layer.uv, "vector", 2, np.float32).astype(np.float64)
+            if not np.all(np.isfinite(uv)):
+                raise BakeError(f"object '{obj.name}': the '{LIGHTMAP_UV}' UV map has NaN values")
+
+        loop_start = _foreach(mesh.polygons, "loop_start", 1, np.int32)
+        loop_total = _foreach(mesh.polygons, "loop_total", 1, np.int32)
+        material_index = _foreach(mesh.polygons, "material_index", 1, np.int32)
+
+        # candidate faces: triangles and quads as loops (k, 4) with triangles repeating the last loop
+        small = np.flatnonzero(loop_total <= 4)
+        loops = loop_start[small, None] + np.minimum(np.arange(4)[None], loop_total[small, None] - 1)
+        corners = positions[loop_vertex[loops]]
+        area, size, split = _areas_and_bad_quads(corners, loop_total[small] == 4)
+        keep = ~split
+        face_loops = [loops[keep]]
+        face_polygon = [small[keep]]
+        face_count = [loop_total[small[keep]]]
+
+        # n-gons and bent/concave quads: Blender's triangulation of exactly those polygons
+        needs_triangles = np.zeros(len(loop_total), dtype=bool)
+        needs_triangles[loop_total > 4] = True
+        needs_triangles[small[split]] = True
+        if needs_triangles.any():
+            mesh.calc_loop_triangles()
+            tri_loops = _foreach(mesh.loop_triangles, "loops", 3, np.int32)
+            tri_polygon = _foreach(mesh.loop_triangles, "polygon_index", 1, np.int32)
+            chosen = needs_triangles[tri_polygon]
+            face_loops.append(np.concatenate([tri_loops[chosen], tri_loops[chosen][:, 2:3]], axis=1))
+            face_polygon.append(tri_polygon[chosen])
+            face_count.append(np.full(int(chosen.sum()), 3, dtype=np.int32))
+        face_loops = np.concatenate(face_loops)
+        face_polygon = np.concatenate(face_polygon)
+        face_count = np.concatenate(face_count)
+
+        corners = positions[loop_vertex[face_loops]]
+        area, size, _ = _areas_and_bad_quads(corners, np.zeros(len(corners), dtype=bool))
+        valid = area > DEGENERATE_AREA_FRACTION * np.maximum(size, 1e-300) ** 2
+        if not valid.all():
+            self.warnings.append(f"object '{obj.name}': skipped {int((~valid).sum())} faces of zero area")
+        if not valid.any():
+            if with_lightmap_uv:
+                raise BakeError(f"object '{obj.name}' has only faces of zero area")
+            return 0
+        if np.linalg.det(matrix[:3, :3]) < 0:  # a mirroring transform turns the winding around
+            quads = face_count == 4
+            face_loops[quads] = face_loops[quads][:, ::-1]
+            face_loops[~quads] = face_loops[~quads][:, [2, 1, 0, 0]]
+
+        slots = obj_eval.material_slots
+        for index in np.flatnonzero(valid):
+            count = int(face_count[index])
+            face = face_loops[index, :count]
+            slot_index = int(material_index[face_polygon[index]])
+            material = slots[slot_index].material if slot_index < len(slots) else None
+            reflectance, emission = self.materials.colours(material)
+            entry = {
+                "name": f"{obj.name}#{len(self.entries)}",
+                "object": obj.name,
+                "vertices": positions[loop_vertex[face]].tolist(),
+                "reflectance": reflectance.tolist(),
+                "emission": emission.tolist(),
+            }
+            if uv is not None:
+                entry["uv"] = uv[face].tolist()
+            self.entries.append(entry)
+        return int(valid.sum())
+
+
+def export_scene(depsgraph, baked, occluders) -> ExportedScene:
+    """`baked`: mesh objects that get lightmaps (each needs a 'Lightmap' UV map); `occluders`: other
+    mesh objects that only take part in the light transport."""
+    exporter = MeshExporter()
+    for obj in baked:
+        exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=True)
+    for obj in occluders:
+        exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=False)
+    if not exporter.entries:
+        raise BakeError("nothing to bake: the selected objects have no faces")
+    try:
+        scene = scene_from_dict({"surfaces": exporter.entries}, require_emitter=True)
+    except SceneError as error:
+        if "nothing emits light" in str(error):
+            raise BakeError("nothing emits light: give a mesh an emissive material (Emission Strength > 0);"
+                            " lamps are not baked") from None
+        raise BakeError(str(error)) from None
+    return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked],
+                         warnings=exporter.materials.warnings + exporter.warnings)
