@@ -13,7 +13,7 @@ import numpy as np
 from . import effects, gl
 from .patches import subdivide
 from .scene import Scene, check_has_emitter
-from .solution import Solution, SolveError, SolveSettings, StageTimer
+from .solution import Solution, SolveSettings, StageTimer
 
 
 def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, should_cancel=None,
@@ -36,10 +36,8 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, sh
                                                    progress, should_cancel)
             elements = None
         else:
-            try:
-                from .progressive import solve_progressive
-            except ImportError:
-                raise SolveError("the progressive method is not available yet; use --method hemicube") from None
+            from .progressive import solve_progressive
+
             radiosity, elements, details = solve_progressive(gl_ctx, scene, patches, settings, timer,
                                                              progress, should_cancel)
     timer.timings["total"] = time.perf_counter() - started

@@ -1,0 +1,59 @@
+#version 430
+// Tessellates one patch (its four corners arrive as a lines_adjacency
+// primitive; triangles repeat their last corner) into TESSELLATION x
+// TESSELLATION quads written as triangle strips (dissertation Algorithm 7),
+// and projects every vertex hemispherically from the eye:
+//   (x/|p|, y/|p|, depth linear in |p|), x, y, z in the eye's frame.
+// A straight-edged triangle only approximates the curved image of a patch
+// edge; tessellating makes the approximation close. TESSELLATION = 1 is the
+// plain projection of Coombe et al.
+layout(lines_adjacency) in;
+layout(triangle_strip, max_vertices = MAX_VERTICES) out;
+
+in vec3 v_position[];
+flat in uint v_patch[];
+
+uniform vec3 eye;
+uniform vec3 axis_x;
+uniform vec3 axis_y;
+uniform vec3 axis_z;      // the hemisphere's pole (the shooter's normal)
+uniform float near;
+uniform float far;
+uniform int skip_patch;   // the shooter itself is not drawn (-1: draw all)
+
+flat out uint item;
+out float gl_ClipDistance[1];
+
+vec3 corner(float s, float t) {
+    return v_position[0] * (1.0 - s) * (1.0 - t) + v_position[1] * s * (1.0 - t)
+         + v_position[2] * s * t + v_position[3] * (1.0 - s) * t;
+}
+
+void emit(vec3 position, uint id) {
+    vec3 d = position - eye;
+    vec3 q = vec3(dot(d, axis_x), dot(d, axis_y), dot(d, axis_z));
+    float distance = max(length(q), 1e-20);
+    gl_Position = vec4(q.xy / distance, 2.0 * (distance - near) / (far - near) - 1.0, 1.0);
+    gl_ClipDistance[0] = q.z;  // the front hemisphere only
+    item = id;
+    EmitVertex();
+}
+
+void main() {
+    if (int(v_patch[0]) == skip_patch) {
+        return;
+    }
+    vec3 normal = cross(v_position[2] - v_position[0], v_position[3] - v_position[1]);
+    // Backs of patches occlude but receive nothing: item 0 means "no patch".
+    uint id = dot(eye - v_position[0], normal) > 0.0 ? v_patch[0] + 1u : 0u;
+    for (int j = 0; j < TESSELLATION; ++j) {
+        float t0 = float(j) / float(TESSELLATION);
+        float t1 = float(j + 1) / float(TESSELLATION);
+        for (int i = 0; i <= TESSELLATION; ++i) {
+            float s = float(i) / float(TESSELLATION);
+            emit(corner(s, t0), id);
+            emit(corner(s, t1), id);
+        }
+        EndPrimitive();
+    }
+}
