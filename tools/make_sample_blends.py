@@ -29,6 +29,7 @@ OUT_DIR = ROOT / "sample_blends"
 
 def reset() -> None:
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.context.preferences.filepaths.save_version = 0  # no .blend1 backups in the repository
     scene = bpy.context.scene
     scene.render.resolution_x = scene.render.resolution_y = 512
     world = bpy.data.worlds.new("Dark")
