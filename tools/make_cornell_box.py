@@ -43,6 +43,10 @@ TALL_BLOCK = [
 BLOCK_FACE_NAMES = ["top", "side_a", "side_b", "side_c", "side_d"]
 LIGHT_Y = 548.8 - 5.0
 LIGHT = [[343, LIGHT_Y, 227], [343, LIGHT_Y, 332], [213, LIGHT_Y, 332], [213, LIGHT_Y, 227]]
+# The official camera: eye (278, 273, -800) mm looking along +z, a 35 mm lens on a
+# 25 mm square film: vertical field of view 2 atan(12.5 / 35) = 39.3°.
+CAMERA = {"eye": [0.278, 0.273, -0.8], "forward": [0, 0, 1], "up": [0, 1, 0],
+          "fov_y_degrees": round(2 * np.degrees(np.arctan(12.5 / 35)), 4)}
 
 
 def oriented(vertices, faces_towards=None, faces_away_from=None):
@@ -77,7 +81,7 @@ def main():
     light = oriented(LIGHT, faces_towards=np.array([278.0, 0.0, 279.6]))
     surfaces.append(surface("light", "light", LIGHT_REFLECTANCE, LIGHT_EMISSION, light))
     out = Path(__file__).resolve().parents[1] / "radiosity_addon/core/scenes/cornell-box.json"
-    out.write_text(json.dumps({"surfaces": surfaces}, indent=1) + "\n")
+    out.write_text(json.dumps({"camera": CAMERA, "surfaces": surfaces}, indent=1) + "\n")
     print(f"wrote {out}")
 
 
