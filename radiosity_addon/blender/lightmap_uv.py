@@ -9,6 +9,8 @@ from __future__ import annotations
 import contextlib
 import io
 
+import numpy as np
+
 from .errors import BakeError
 from .tags import CREATED_UV, LIGHTMAP_UV
 
@@ -33,6 +35,11 @@ def add_lightmap_uvs(objects, margin: float) -> list:
         if len(mesh.uv_layers) >= MAX_UV_MAPS:
             raise BakeError(f"mesh '{mesh.name}' already has {MAX_UV_MAPS} UV maps; rename one to"
                             f" '{LIGHTMAP_UV}' or remove one")
+    for mesh in meshes:
+        positions = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+        mesh.vertices.foreach_get("co", positions)
+        if not np.all(np.isfinite(positions)):
+            raise BakeError(f"mesh '{mesh.name}' has vertices at NaN or infinite positions")
     changed = []
     try:
         for mesh in meshes:
@@ -43,8 +50,13 @@ def add_lightmap_uvs(objects, margin: float) -> list:
         if meshes:
             # Lightmap Pack writes into the active UV map and chats on stdout
             with contextlib.redirect_stdout(io.StringIO()):
-                lightmap_uvpack(meshes, PREF_SEL_ONLY=False, PREF_NEW_UVLAYER=False, PREF_PACK_IN_ONE=False,
-                                PREF_BOX_DIV=12, PREF_MARGIN_DIV=int(1.0 / (margin / 100.0)))
+                try:
+                    lightmap_uvpack(meshes, PREF_SEL_ONLY=False, PREF_NEW_UVLAYER=False, PREF_PACK_IN_ONE=False,
+                                    PREF_BOX_DIV=12, PREF_MARGIN_DIV=int(1.0 / (margin / 100.0)))
+                except (ArithmeticError, ValueError, IndexError) as error:  # degenerate input to Blender's packer
+                    names = ", ".join(f"'{mesh.name}'" for mesh in meshes)
+                    raise BakeError(f"Lightmap Pack failed on {names} ({type(error).__name__}); give the mesh a"
+                                    f" '{LIGHTMAP_UV}' UV map yourself") from None
         for mesh, previous_active in changed:
             mesh.uv_layers.active_index = max(previous_active, 0)
             mesh[CREATED_UV] = True
