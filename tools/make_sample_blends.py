@@ -34,6 +34,11 @@ def reset() -> None:
     scene.render.resolution_x = scene.render.resolution_y = 512
     world = bpy.data.worlds.new("Dark")
     world.color = (0.0, 0.0, 0.0)
+    # a new world's node tree shines a 0.05 grey: the radiosity bake has no sky, so neither may Cycles
+    for node in (world.node_tree.nodes if world.node_tree else ()):
+        if node.bl_idname == "ShaderNodeBackground":
+            node.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+            node.inputs["Strength"].default_value = 0.0
     scene.world = world
 
 
@@ -161,7 +166,7 @@ def make_room() -> Path:
     apex = (0.0, 0.0, 0.7)
     faces = [tuple(reversed(range(sides)))] + [(k, (k + 1) % sides, sides) for k in range(sides)]
     pyramid = mesh_object("Pyramid", ring + [apex], faces, [stone])
-    pyramid.location = (-1.1, -0.6, 0.0)
+    pyramid.location = (-0.5, 0.9, 0.0)
 
     panel = [(-0.5, -0.3, 0.0), (-0.5, 0.3, 0.0), (0.5, 0.3, 0.0), (0.5, -0.3, 0.0)]  # faces down
     light = mesh_object("Ceiling Light", panel, [(0, 1, 2, 3)], [lamp])
