@@ -57,8 +57,9 @@ def test_two_bakes_leave_one_image_per_object_and_no_extra_materials():
     assert second == first
 
 
-def test_restore_brings_back_the_original_node_trees():
-    support.open_blend(support.CORNELL)
+@pytest.mark.parametrize("sample", [support.CORNELL, support.ROOM], ids=["cornell", "room"])
+def test_restore_brings_back_the_original_node_trees(sample):
+    support.open_blend(sample)
     before = support.blend_state()
     assert bake() == {"FINISHED"}
     assert support.blend_state() != before

@@ -1,0 +1,139 @@
+"""The operator's UI path and settings: Esc in the modal loop, per-object resolution, selection vs
+occluders, material read-out and its warnings."""
+
+from __future__ import annotations
+
+import time
+from types import SimpleNamespace
+
+import blender_support as support
+import bpy
+import numpy as np
+import pytest
+
+from radiosity_addon.blender import operators
+from radiosity_addon.blender.bake import prepare
+from radiosity_addon.blender.materials import MaterialReader
+
+
+class FakeWindowManager:
+    windows = ()
+
+    def __init__(self):
+        self.progress = []
+
+    def progress_update(self, value):
+        self.progress.append(value)
+
+    def progress_end(self):
+        pass
+
+    def event_timer_remove(self, timer):
+        pass
+
+
+def test_escape_in_the_modal_loop_cancels_and_leaves_the_file_unchanged():
+    """Drive RADIOSITY_OT_bake.modal as Blender's event loop would: timer ticks, then Esc."""
+    context = support.open_blend(support.CORNELL, method="progressive", subdivision=4)
+    before = support.blend_state()
+    plan = prepare(context, context.scene.radiosity)
+    assert support.blend_state() != before  # prepare made the Lightmap UV maps
+    operators.running = plan
+    plan.worker.start()
+    reports = []
+    fake_operator = SimpleNamespace(_timer=None, report=lambda kind, text: reports.append((kind, text)))
+    fake_operator._end = lambda ctx, p: operators.RADIOSITY_OT_bake._end(fake_operator, ctx, p)
+    status = []
+    fake_context = SimpleNamespace(window_manager=FakeWindowManager(),
+                                   workspace=SimpleNamespace(status_text_set=status.append))
+    tick = SimpleNamespace(type="TIMER", value="NOTHING")
+    escape = SimpleNamespace(type="ESC", value="PRESS")
+    try:
+        while not plan.worker.snapshot().fraction > 0 and not plan.worker.done:
+            assert operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, tick) == {"RUNNING_MODAL"}
+            time.sleep(0.05)
+        assert not plan.worker.done, "the solve ended before Esc could be pressed"
+        assert any("Esc cancels" in (line or "") for line in status)
+        result = operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, escape)
+        deadline = time.monotonic() + 60
+        while result == {"RUNNING_MODAL"} and time.monotonic() < deadline:
+            time.sleep(0.05)
+            result = operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, tick)
+    finally:
+        operators.running = None
+    assert result == {"CANCELLED"}
+    assert reports and reports[-1][0] == {"WARNING"} and "cancelled" in reports[-1][1]
+    assert status[-1] is None  # the status bar is given back
+    assert support.blend_state() == before
+
+
+def test_object_resolution_override_sets_the_lightmap_size():
+    support.open_blend(support.CORNELL)
+    bpy.data.objects["floor"].radiosity.lightmap_resolution = 48
+    assert bpy.ops.radiosity.bake() == {"FINISHED"}
+    assert tuple(bpy.data.images["floor_lightmap"].size) == (48, 48)
+    assert tuple(bpy.data.images["ceiling_lightmap"].size) != (48, 48)
+
+
+def test_only_selected_objects_get_lightmaps_and_unselected_ones_still_light_them():
+    support.open_blend(support.CORNELL)
+    floor = bpy.data.objects["floor"]
+    support.select_only([floor])
+    assert bpy.ops.radiosity.bake() == {"FINISHED"}
+    assert sorted(i.name for i in bpy.data.images) == ["floor_lightmap"]
+    assert "Lightmap" not in bpy.data.objects["ceiling"].data.uv_layers
+    rgba = support.image_rgba(bpy.data.images["floor_lightmap"])
+    assert rgba[..., :3][rgba[..., 3] > 0].max() > 0  # lit by the unselected light
+
+    support.open_blend(support.CORNELL)
+    bpy.context.scene.radiosity.include_unselected = False
+    support.select_only([bpy.data.objects["floor"]])
+    before = support.blend_state()
+    with pytest.raises(RuntimeError, match="nothing emits light"):
+        bpy.ops.radiosity.bake()
+    assert support.blend_state() == before
+
+
+def new_material(name, shader="ShaderNodeBsdfPrincipled"):
+    material = bpy.data.materials.new(name)
+    tree = material.node_tree
+    output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    if shader != "ShaderNodeBsdfPrincipled":
+        node = tree.nodes.new(shader)
+        tree.links.new(node.outputs[0], output.inputs["Surface"])
+    return material, tree
+
+
+def test_materials_become_reflectance_and_emission_with_warnings_for_what_cannot_bake():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    reader = MaterialReader()
+
+    plain, tree = new_material("plain")
+    principled = tree.nodes["Principled BSDF"]
+    principled.inputs["Base Color"].default_value = (0.2, 0.4, 0.6, 1)
+    principled.inputs["Emission Color"].default_value = (1.0, 0.5, 0.25, 1)
+    principled.inputs["Emission Strength"].default_value = 4.0
+    reflectance, emission = reader.colours(plain)
+    assert np.allclose(reflectance, [0.2, 0.4, 0.6]) and np.allclose(emission, [4.0, 2.0, 1.0])
+    assert reader.warnings == []
+
+    textured, tree = new_material("textured")
+    image = bpy.data.images.new("checker", 4, 4, float_buffer=True)
+    image.pixels.foreach_set(np.tile([0.1, 0.3, 0.5, 1.0], 16).astype(np.float32))
+    texture = tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    tree.links.new(texture.outputs["Color"], tree.nodes["Principled BSDF"].inputs["Base Color"])
+    reflectance, _ = reader.colours(textured)
+    assert np.allclose(reflectance, [0.1, 0.3, 0.5], atol=1e-6)
+    assert any("textured" in w and "average colour" in w for w in reader.warnings)
+
+    glossy, _ = new_material("glossy", "ShaderNodeBsdfGlossy")
+    reflectance, emission = reader.colours(glossy)
+    assert np.allclose(reflectance, 0.8) and not emission.any()
+    assert any("glossy" in w and "not diffuse" in w for w in reader.warnings)
+
+    white, tree = new_material("white")
+    tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (1, 1, 1, 1)
+    reflectance, _ = reader.colours(white)
+    assert reflectance.max() < 1
+    assert any("white" in w and "capped" in w for w in reader.warnings)
