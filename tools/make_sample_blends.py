@@ -104,7 +104,8 @@ def y_up_to_z_up(point):
 
 def make_cornell_box() -> Path:
     reset()
-    surfaces = json.loads(CORNELL_JSON.read_text())["surfaces"]
+    data = json.loads(CORNELL_JSON.read_text())
+    surfaces = data["surfaces"]
     materials = {}
     parts: dict[str, list] = {}
     for surface in surfaces:
@@ -122,8 +123,10 @@ def make_cornell_box() -> Path:
             vertices.extend(y_up_to_z_up(v) for v in surface["vertices"])
             face_materials.append(object_materials.index(material))
         mesh_object(object_name, vertices, faces, object_materials, face_materials)
-    # the Cornell camera: 0.8 m in front of the open side, looking in
-    add_camera((0.278, 0.800, 0.273), (90.0, 0.0, 180.0), 39.3)
+    # the Cornell camera: 0.8 m in front of the open side, looking in (+z of the data = -y in Blender)
+    camera = data.get("camera", {"eye": [0.278, 0.273, -0.8], "forward": [0, 0, 1], "fov_y_degrees": 39.3076})
+    assert camera["forward"] == [0, 0, 1], "the sample's camera rotation assumes the data looks along +z"
+    add_camera(y_up_to_z_up(camera["eye"]), (90.0, 0.0, 180.0), camera["fov_y_degrees"])
     select_meshes()
     return save("cornell_box.blend")
 
