@@ -60,8 +60,26 @@ def lightmap_images(scene: Scene, solution, objects: list[str], options: Lightma
     for name in objects:
         if name not in lightmaps:
             raise SolveError(f"object '{name}': no lightmap was produced")
-        images[name] = np.ascontiguousarray(lightmaps[name].rgba, dtype=np.float32)
+        images[name] = filled_image(lightmaps[name].levels)
     return images
+
+
+def filled_image(levels: list) -> np.ndarray:
+    """Level 0 of a coverage-aware mip chain with every uncovered texel filled from the finest
+    level that covers it (push-pull); alpha keeps the coverage.
+
+    Blender builds its own mipmaps by plain averaging, so texels outside the charts and their
+    gutters must hold nearby values, not black, or distant mips darken the chart borders."""
+    coarsest = levels[-1]
+    rgb = coarsest[..., :3].astype(np.float32)
+    covered = coarsest[..., 3] > 0
+    rgb[~covered] = rgb[covered].mean(axis=0) if covered.any() else 0.0
+    for level in reversed(levels[:-1]):
+        height, width = level.shape[:2]
+        coarse = np.repeat(np.repeat(rgb, 2, axis=0), 2, axis=1)[:height, :width]
+        coarse = np.pad(coarse, ((0, height - coarse.shape[0]), (0, width - coarse.shape[1]), (0, 0)), mode="edge")
+        rgb = np.where((level[..., 3] > 0)[..., None], level[..., :3], coarse)
+    return np.ascontiguousarray(np.concatenate([rgb, levels[0][..., 3:4]], axis=2), dtype=np.float32)
 
 
 class BakeWorker:
