@@ -18,8 +18,8 @@ import bpy
 import numpy as np
 
 from .errors import BakeError
-from .tags import (ADDED_SLOT, COPY_OF, CREATED_UV, LIGHTMAP_UV, NODE_TAG, ORIGINAL_OUTPUT, ORIGINAL_SLOTS,
-                   is_ours, lightmap_image_name)
+from .tags import (ADDED_SLOT, COPY_OF, CREATED_UV, ENABLED_NODES, LIGHTMAP_UV, NODE_TAG, ORIGINAL_OUTPUT,
+                   ORIGINAL_SLOTS, is_ours, lightmap_image_name, uses_nodes)
 
 PENDING_SUFFIX = ".radiosity-pending"
 NODE_NAMES = {
@@ -140,10 +140,10 @@ def _tagged(tree, role: str, kind: str, location):
 
 def wire_material(material, image) -> None:
     """Show `image` (on the Lightmap UV map, linear filtering) as the material's surface."""
-    tree = material.node_tree
-    if tree is None:  # only very old files; Blender 5 materials always have nodes
+    if not uses_nodes(material):  # Blender 4.x material shown without nodes: remember to switch back
+        material[ENABLED_NODES] = True
         material.use_nodes = True
-        tree = material.node_tree
+    tree = material.node_tree
     if ORIGINAL_OUTPUT not in material:
         active = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"
                        and n.is_active_output and not is_ours(n)), None)
@@ -187,6 +187,9 @@ def unwire_material(material) -> None:
             node.is_active_output = True
     if ORIGINAL_OUTPUT in material:
         del material[ORIGINAL_OUTPUT]
+    if material.get(ENABLED_NODES):
+        material.use_nodes = False
+        del material[ENABLED_NODES]
 
 
 def remove_bake(obj) -> bool:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .tags import original_output_node
+from .tags import ENABLED_NODES, original_output_node, uses_nodes
 
 DEFAULT_REFLECTANCE = np.array([0.8, 0.8, 0.8])  # Blender's default surface colour
 MAX_REFLECTANCE = 0.99  # the solve needs rho < 1; a white of 1.0 is common in Blender
@@ -42,8 +42,9 @@ class MaterialReader:
         return self.cache[key]
 
     def _read(self, material):
-        tree = material.node_tree
-        output = original_output_node(material) if tree else None
+        if not uses_nodes(material) or material.get(ENABLED_NODES):  # Blender 4.x without nodes: its colour
+            return np.array(material.diffuse_color[:3], dtype=np.float64), np.zeros(3)
+        output = original_output_node(material)
         surface = output.inputs.get("Surface") if output else None
         if surface is None or not surface.is_linked:
             self.warn(material, "no shader on the Material Output; using a grey default")

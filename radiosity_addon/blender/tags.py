@@ -13,6 +13,7 @@ ORIGINAL_SLOTS = "radiosity_baker_original_slots"  # object: [[link, material na
 ADDED_SLOT = "radiosity_baker_added_slot"  # object: the bake appended an empty slot to its mesh
 COPY_OF = "radiosity_baker_copy_of"  # material: made by the bake for one object from this material
 CREATED_UV = "radiosity_baker_created_uv"  # mesh: the bake made its 'Lightmap' UV map
+ENABLED_NODES = "radiosity_baker_enabled_nodes"  # material: the bake switched on use_nodes (Blender 4.x)
 LIGHTMAP_UV = "Lightmap"
 IMAGE_SUFFIX = "_lightmap"
 
@@ -23,6 +24,14 @@ def lightmap_image_name(object_name: str) -> str:
 
 def is_ours(node) -> bool:
     return bool(node.get(NODE_TAG))
+
+
+def uses_nodes(material) -> bool:
+    """Blender 4.x materials may render without their node tree; from 5.0 every material uses nodes
+    (and reading `use_nodes` only warns that it is deprecated)."""
+    import bpy
+
+    return material.node_tree is not None and (bpy.app.version >= (5, 0, 0) or material.use_nodes)
 
 
 def original_output_node(material):
