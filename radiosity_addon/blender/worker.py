@@ -20,6 +20,9 @@ from ..core.scene import Scene
 from ..core.solution import SolveCancelled, SolveError, SolveSettings
 
 
+OCCLUDER_LIGHTMAP_SIZE = 8  # core.lightmap.MIN_SIZE
+
+
 @dataclass
 class LightmapOptions:
     texel_density: float = 64.0  # texels per metre
@@ -54,6 +57,8 @@ def lightmap_images(scene: Scene, solution, objects: list[str], options: Lightma
     except ImportError:
         raise SolveError("the lightmap stage is not available in this build") from None
     overrides = {name: size for name, size in options.resolution_overrides.items() if size > 0}
+    # objects that only occlude get no image: lay them out at the smallest size the core accepts
+    overrides.update({name: OCCLUDER_LIGHTMAP_SIZE for name in scene.objects if name not in objects})
     lightmaps = bake_lightmaps(scene, solution, texel_density=options.texel_density,
                                resolution_overrides=overrides or None, max_size=options.max_size, ctx=ctx)
     images = {}
