@@ -19,6 +19,7 @@ from .materials import MaterialReader
 from .tags import LIGHTMAP_UV
 
 DEGENERATE_AREA_FRACTION = 1e-10
+OCCLUDER_UV = {3: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], 4: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]}
 
 
 @dataclass
@@ -141,8 +142,8 @@ class MeshExporter:
                 "reflectance": reflectance.tolist(),
                 "emission": emission.tolist(),
             }
-            if uv is not None:
-                entry["uv"] = uv[face].tolist()
+            # occluders get no image: overlapping unit-square UVs spare the core an automatic layout
+            entry["uv"] = uv[face].tolist() if uv is not None else OCCLUDER_UV[count]
             self.entries.append(entry)
         return int(valid.sum())
 
