@@ -6,8 +6,11 @@
 //   (x/|p|, y/|p|, depth linear in |p|), x, y, z in the eye's frame.
 // A straight-edged triangle only approximates the curved image of a patch
 // edge; tessellating makes the approximation close. TESSELLATION = 1 is the
-// plain projection of Coombe et al.
-layout(lines_adjacency) in;
+// plain projection of Coombe et al. Fewer segments are used for patches that
+// look small from the eye (SEGMENT_ANGLE radians each at most).
+// Rows of the grid are shared among INVOCATIONS geometry shader invocations
+// so that the output of each stays within portable limits.
+layout(lines_adjacency, invocations = INVOCATIONS) in;
 layout(triangle_strip, max_vertices = MAX_VERTICES) out;
 
 in vec3 v_position[];
@@ -43,14 +46,31 @@ void main() {
     if (int(v_patch[0]) == skip_patch) {
         return;
     }
+    float highest = -1.0;
+    for (int k = 0; k < 4; ++k) {
+        highest = max(highest, dot(v_position[k] - eye, axis_z));
+    }
+    if (highest <= 0.0) {
+        return;  // wholly behind the eye's hemisphere
+    }
     vec3 normal = cross(v_position[2] - v_position[0], v_position[3] - v_position[1]);
     // Backs of patches occlude but receive nothing: item 0 means "no patch".
     uint id = dot(eye - v_position[0], normal) > 0.0 ? v_patch[0] + 1u : 0u;
-    for (int j = 0; j < TESSELLATION; ++j) {
-        float t0 = float(j) / float(TESSELLATION);
-        float t1 = float(j + 1) / float(TESSELLATION);
-        for (int i = 0; i <= TESSELLATION; ++i) {
-            float s = float(i) / float(TESSELLATION);
+    // Adaptive: as many segments per side as the patch's angular size needs
+    // (a chord of SEGMENT_ANGLE radians strays ~angle^2/8 from the curved image).
+    float extent = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        vec3 a = normalize(v_position[k] - eye);
+        for (int m = k + 1; m < 4; ++m) {
+            extent = max(extent, acos(clamp(dot(a, normalize(v_position[m] - eye)), -1.0, 1.0)));
+        }
+    }
+    int n = clamp(int(ceil(extent / SEGMENT_ANGLE)), 1, TESSELLATION);
+    for (int j = gl_InvocationID; j < n; j += INVOCATIONS) {
+        float t0 = float(j) / float(n);
+        float t1 = float(j + 1) / float(n);
+        for (int i = 0; i <= n; ++i) {
+            float s = float(i) / float(n);
             emit(corner(s, t0), id);
             emit(corner(s, t1), id);
         }

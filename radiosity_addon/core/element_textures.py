@@ -114,7 +114,9 @@ class ElementTextures:
         """Mip levels 1..log2(S) of the residual (level log2(S): tile means)."""
         if self.layout.level > 0:
             self.residual.build_mipmaps(0, self.layout.level)
-        self.residual.filter = (self.ctx.NEAREST_MIPMAP_NEAREST, self.ctx.NEAREST)
+            self.residual.filter = (self.ctx.NEAREST_MIPMAP_NEAREST, self.ctx.NEAREST)
+        else:  # S = 1: level 0 already holds one texel per patch (no mip levels: keep it complete)
+            self.residual.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
 
     def read_padded_radiosity(self) -> np.ndarray:
         """(P, S+2g, S+2g, 3) float64: the padded radiosity tiles."""

@@ -25,8 +25,6 @@ from .shooting import READBACK, Gatherer, PatchBuffers, Selector, patch_shooter
 from .solution import SolveCancelled, SolveSettings, StageTimer
 from .visibility import VARIANTS, VisibilityMap
 
-DEFAULT_VISIBILITY_RESOLUTION = 512
-
 
 class EnergyLedger:
     """Power accounts in float64 (RGB): emitted = absorbed + escaped + unshot."""
@@ -78,7 +76,7 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
     """(patch radiosity (P, 3), element radiosity (P, S, S, 3), report details)."""
     started = time.perf_counter()
     variant = settings.visibility
-    resolution = getattr(settings, "visibility_res", None) or DEFAULT_VISIBILITY_RESOLUTION
+    resolution = settings.visibility_res
     tolerance = settings.effective_tolerance
     max_shots = settings.max_shots if settings.max_shots is not None else 1_000_000
 

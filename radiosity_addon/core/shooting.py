@@ -127,16 +127,21 @@ class Gatherer:
         self.visibility = ctx.buffer(reserve=4 * self.element_count) if record_visibility else None
 
     def shoot(self, shooter: Shooter, visibility_map: VisibilityMap) -> None:
-        p = self.program
-        p["item_resolution"] = visibility_map.resolution
-        p["shooter_patch"] = shooter.patch
-        p["shooter_position"] = tuple(map(float, shooter.position))
-        p["shooter_axis_x"] = tuple(map(float, shooter.axes[0]))
-        p["shooter_axis_y"] = tuple(map(float, shooter.axes[1]))
-        p["shooter_normal"] = tuple(map(float, shooter.axes[2]))
-        p["shooter_polygon"] = [tuple(map(float, c)) for c in shooter.polygon]
-        p["shooter_area"] = float(shooter.area)
-        p["shooter_radiosity"] = tuple(map(float, shooter.radiosity))
+        vector = lambda v: tuple(map(float, v))  # noqa: E731
+        uniforms = {
+            "item_resolution": visibility_map.resolution,
+            "shooter_patch": shooter.patch,
+            "shooter_position": vector(shooter.position),
+            "shooter_axis_x": vector(shooter.axes[0]),
+            "shooter_axis_y": vector(shooter.axes[1]),
+            "shooter_normal": vector(shooter.axes[2]),
+            "shooter_polygon": [vector(c) for c in shooter.polygon],
+            "shooter_area": float(shooter.area),
+            "shooter_radiosity": vector(shooter.radiosity),
+        }
+        for name, value in uniforms.items():
+            if self.program.get(name, None) is not None:  # a kernel may not use every uniform
+                self.program[name] = value
         self.buffers.bind()
         if self.visibility is not None:
             self.visibility.bind_to_storage_buffer(5)
@@ -144,7 +149,7 @@ class Gatherer:
         self.textures.radiosity.bind_to_image(0, read=True, write=True)
         self.textures.residual.bind_to_image(1, read=True, write=True, level=0)
         self.ctx.memory_barrier()
-        p.run(gl.groups(self.element_count, 64))
+        self.program.run(gl.groups(self.element_count, 64))
         self.ctx.memory_barrier()
 
     def recorded_visibility(self) -> np.ndarray:

@@ -35,6 +35,7 @@ class SolveSettings:
     max_shots: int | None = None  # progressive; None: as many as the tolerance needs
     visibility: str = "search"  # progressive: plain | tessellated | search
     kernel: str = "exact"  # progressive: exact | disk
+    visibility_res: int = 512  # progressive: pixels across the hemispherical visibility map
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
 
     @property
@@ -52,6 +53,12 @@ class SolveSettings:
             raise SolveError("elements per patch must be a power of two (1, 2, 4, 8, ...)")
         if self.hemicube_res < 8 or self.hemicube_res % 2:
             raise SolveError("hemi-cube resolution must be an even number of at least 8")
+        if self.visibility not in ("plain", "tessellated", "search"):
+            raise SolveError(f"unknown visibility variant '{self.visibility}' (choose plain, tessellated, search)")
+        if self.kernel not in ("exact", "disk"):
+            raise SolveError(f"unknown kernel '{self.kernel}' (choose exact, disk)")
+        if not 16 <= self.visibility_res <= 8192:
+            raise SolveError("visibility map resolution must lie between 16 and 8192 pixels")
         if not 0 < self.effective_tolerance < 1:
             raise SolveError("tolerance must lie between 0 and 1")
 

@@ -6,7 +6,8 @@ patch id + 1 (0: nothing, or the back of a patch). The shooting pass then
 looks receivers up in it. Variants (see `VARIANTS`):
 
 - plain: each patch drawn as two straight triangles (Coombe et al. 2004);
-- tessellated: each patch split into TESSELLATION^2 quads in a geometry shader
+- tessellated: each patch split into up to TESSELLATION^2 quads (fewer when it looks
+  small from the eye) in a geometry shader
   (dissertation Algorithm 7), so the straight edges follow the curved image;
 - search: tessellated, and a receiver also accepts its id in the texels
   around its own (dissertation Algorithm 8).
@@ -25,7 +26,12 @@ import numpy as np
 from . import gl
 from .patches import Patches
 
-TESSELLATION = 8
+TESSELLATION = 32  # most segments per patch side
+# Geometry shader instances per patch (each draws every k-th row of the grid): fewer is faster
+# on llvmpipe (4: 5 ms, 16: 12 ms per 1088-patch map) but needs more output per instance than
+# the GL minimum (1024 components); the first count that links is used.
+GEOMETRY_INVOCATIONS = (4, 8, 16, 32)
+SEGMENT_ANGLE = 0.15  # radians seen from the eye per segment, at most (when TESSELLATION allows)
 
 
 @dataclass(frozen=True)
@@ -68,10 +74,7 @@ class VisibilityMap:
         self.resolution = resolution
         self.variant = VARIANTS[variant]
         n = self.variant.tessellation
-        self.program = gl.program(
-            ctx, "hemisphere_item_buffer.vert", "hemisphere_item_buffer.frag", "hemisphere_item_buffer.geom",
-            defines={"TESSELLATION": n, "MAX_VERTICES": 2 * (n + 1) * n},
-        )
+        self.program = self._link(ctx, n)
         self.program["near"] = 0.0
         self.program["far"] = 2.0 * scene_diameter
         vertices = np.empty(len(patches) * 4, dtype=[("p", "f4", 3), ("id", "u4")])
@@ -83,6 +86,22 @@ class VisibilityMap:
         self.items.filter = (ctx.NEAREST, ctx.NEAREST)
         self.depth = ctx.depth_renderbuffer((resolution, resolution))
         self.framebuffer = ctx.framebuffer([self.items], self.depth)
+
+    @staticmethod
+    def _link(ctx, n: int):
+        error = None
+        for invocations in GEOMETRY_INVOCATIONS:
+            invocations = min(n, invocations)
+            try:
+                return gl.program(
+                    ctx, "hemisphere_item_buffer.vert", "hemisphere_item_buffer.frag", "hemisphere_item_buffer.geom",
+                    defines={"TESSELLATION": n, "INVOCATIONS": invocations,
+                             "MAX_VERTICES": 2 * (n + 1) * -(-n // invocations),
+                             "SEGMENT_ANGLE": SEGMENT_ANGLE if n > 1 else 1e9},
+                )
+            except Exception as failure:  # moderngl raises plain Errors on compile/link failure
+                error = failure
+        raise error
 
     def render(self, eye, axes, skip_patch: int = -1) -> None:
         """Draw the item buffer from `eye`, axes = (x, y, pole); `skip_patch` is left out."""
