@@ -23,7 +23,8 @@ $(STAMP): requirements.txt
 
 demo: setup
 	$(PY) -m radiosity_addon solve cornell-box --method hemicube --subdiv 6 \
-	  --output $(OUT)/cornell-box.npz --report $(OUT)/cornell-box-report.json
+	  --output $(OUT)/cornell-box.npz --report $(OUT)/cornell-box-report.json \
+	  --lightmaps $(OUT)/lightmaps --texel-density 256 --preview $(OUT)/cornell-box-preview.png
 
 test: setup
 	$(PY) -m pytest

@@ -6,12 +6,14 @@ Errors a user can cause end in one line on stderr and exit status 2, never a tra
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import time
 from pathlib import Path
 
-from .core.gl import GLUnavailable
+from .core.gl import GLUnavailable, gl_context
+from .core.lightmap import MAX_SIZE, TEXEL_DENSITY
 from .core.scene import SceneError
 from .core.solution import METHODS, SOLVERS, SolveCancelled, SolveError, SolveSettings
 
@@ -87,6 +89,43 @@ def print_progress(quiet: bool):
     return None if quiet else PROGRESS
 
 
+def check_image_options(args) -> None:
+    """Refuse bad lightmap/preview options before the solve, not after it."""
+    if not args.texel_density > 0:
+        raise SolveError(f"--texel-density must be positive, got {args.texel_density}")
+    if args.preview and args.preview_size < 8:
+        raise SolveError(f"--preview-size must be at least 8 pixels, got {args.preview_size}")
+    if args.exposure is not None and not args.exposure > 0:
+        raise SolveError(f"--exposure must be positive, got {args.exposure}")
+
+
+def write_lightmaps_and_preview(args, scene, solution, ctx) -> None:
+    """`solve --lightmaps DIR` / `--preview OUT.png`: bake the lightmaps, write them and the picture."""
+    import numpy as np
+
+    from .core.lightmap import bake_lightmaps
+    from .core.preview import render_preview, save_preview
+
+    lightmaps = bake_lightmaps(scene, solution, texel_density=args.texel_density,
+                               max_size=args.max_lightmap_size, ctx=ctx)
+    if args.lightmaps:
+        directory = Path(args.lightmaps)
+        directory.mkdir(parents=True, exist_ok=True)
+        for name, lightmap in lightmaps.items():
+            np.save(directory / f"{safe_file_name(name)}_lightmap.npy", lightmap.rgba)
+        sizes = ", ".join(f"{name} {lm.size[0]}x{lm.size[1]}" for name, lm in lightmaps.items())
+        print(f"lightmaps ({args.texel_density:g} texels/unit): {sizes} -> {directory}/")
+    if args.preview:
+        preview = render_preview(scene, lightmaps, width=args.preview_size, height=args.preview_size, ctx=ctx)
+        exposure = save_preview(args.preview, scene, preview, exposure=args.exposure)
+        print(f"preview (exposure {exposure:.3g}) -> {args.preview}")
+
+
+def safe_file_name(name: str) -> str:
+    """An object name usable as a file name (path separators and the like become '_')."""
+    return "".join(c if c.isalnum() or c in "-_. " else "_" for c in name).strip() or "object"
+
+
 def command_solve(args) -> int:
     import numpy as np
 
@@ -95,8 +134,14 @@ def command_solve(args) -> int:
 
     scene = load_scene(args.scene)
     settings = settings_from_args(args)
-    solution = solve(scene, settings, progress=print_progress(args.quiet))
-    PROGRESS.end()
+    wants_images = bool(args.lightmaps or args.preview)
+    if wants_images:
+        check_image_options(args)
+    with gl_context() if wants_images else contextlib.nullcontext() as ctx:
+        solution = solve(scene, settings, progress=print_progress(args.quiet), ctx=ctx)
+        PROGRESS.end()
+        if wants_images:
+            write_lightmaps_and_preview(args, scene, solution, ctx)
     report = solution.report
     if args.output:
         Path(args.output).parent.mkdir(parents=True, exist_ok=True)
@@ -139,6 +184,20 @@ def build_parser() -> argparse.ArgumentParser:
     solve_parser.add_argument("--output", metavar="OUT.npz", help="write patch (and element) radiosity")
     solve_parser.add_argument("--report", metavar="REPORT.json", help="write the timings/accuracy/effects report")
     solve_parser.add_argument("--quiet", action="store_true", help="no progress line")
+    images = solve_parser.add_argument_group("lightmaps and preview")
+    images.add_argument("--lightmaps", metavar="DIR",
+                        help="write each object's lightmap as DIR/<object>_lightmap.npy: float32 (H, W, 4)"
+                             " linear radiance, alpha = coverage, row 0 at v = 0")
+    images.add_argument("--texel-density", type=float, default=TEXEL_DENSITY, metavar="D",
+                        help=f"lightmap texels per scene unit (default {TEXEL_DENSITY:g})")
+    images.add_argument("--max-lightmap-size", type=int, default=MAX_SIZE, metavar="N",
+                        help=f"cap on a lightmap's width and height (default {MAX_SIZE})")
+    images.add_argument("--preview", metavar="OUT.png",
+                        help="render the scene with its lightmaps from its camera into a PNG")
+    images.add_argument("--preview-size", type=int, default=512, metavar="N",
+                        help="preview width and height in pixels (default 512)")
+    images.add_argument("--exposure", type=float, default=None,
+                        help="preview exposure (default: lit surfaces just reach white, emitters clip)")
     solve_parser.set_defaults(handler=command_solve)
 
     bake_parser = commands.add_parser("bake", help="bake the mesh objects of a .blend file (needs the bpy module)")

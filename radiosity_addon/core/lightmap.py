@@ -8,15 +8,17 @@ Per object (DESIGN.md, Lightmaps):
    object has none, an automatic layout (`uv_layout`).
 3. Values: every patch carries a lattice of its element centres plus border
    points on its edges and corners; a border point's value is the mean of the
-   values the patches meeting there give it (same object, same world point,
-   same UV point — that is, the same chart), so bilinear interpolation over the
-   lattice is continuous across patch and face borders. Hemi-cube results (one
+   values the patches meeting there give it (same object and world point, and
+   the same UV point or a bend under 30°), so bilinear interpolation over the
+   lattice is continuous across patch borders, across face borders within a
+   chart, and across smooth edges between charts. Hemi-cube results (one
    value per patch) are the case S = 1.
 4. The GPU rasterizes every patch's footprint into the atlas
    (`lightmap_texel_radiosity.frag`): texel centres inside a footprint get its
-   interpolated value, texels it only grazes get its nearest values too.
+   interpolated value; a texel footprints only graze takes the value of the
+   nearest footprint at its nearest point.
 5. Gutters are dilated from the inside (`padding.dilate`) and the mip chain is
-   coverage-aware (`padding.downsample_covered`), each level dilated again.
+   coverage-aware (`padding.downsample_weighted`), each level dilated again.
 
 Images are float32 linear radiance, RGBA, row 0 at v = 0 (the bottom), the
 order of Blender's `image.pixels` and of OpenGL textures. Alpha is coverage:
@@ -26,12 +28,13 @@ order of Blender's `image.pixels` and of OpenGL textures. Alpha is coverage:
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import gl, uv_layout
-from .padding import dilate, downsample_covered
+from .padding import dilate, downsample_weighted
 from .patches import bilinear
 from .scene import Scene, SceneError
 from .solution import Solution, SolveError
@@ -42,12 +45,14 @@ GUTTER = 2  # texels dilated around every chart, at every mip level
 SIZE_MULTIPLE = 8  # sizes round up to this so levels 1-3 halve exactly, as GL's floor(w / 2) does
 MIN_SIZE = 8
 UV_TOLERANCE = 1e-3  # how far given UVs may stray outside [0, 1]
+SMOOTH_EDGE_DEGREES = 30.0  # faces meeting flatter than this share values at their edge (Blender's auto smooth)
 
 
 @dataclass
 class Lightmap:
     object_name: str
     levels: list[np.ndarray]  # mip chain, (h_k, w_k, 4) float32; levels[0] is the image
+    coverage: list[np.ndarray]  # per level, (h_k, w_k) float32: fraction of the texel on charts (alpha adds gutters)
     patch_index: np.ndarray  # (H, W) int32: patch whose footprint holds the texel centre, -1 if none
     surface_uv: dict[int, np.ndarray]  # surface index -> (k, 2) vertex UVs the map was baked with
     texel_density: float  # achieved texels per scene unit: sqrt(texels inside faces / face area)
@@ -63,10 +68,13 @@ class Lightmap:
 
 
 def element_values(solution: Solution) -> np.ndarray:
-    """(P, S, S, 3) radiosity: the elements, or the patch values as S = 1."""
+    """(P, S, S, 3) radiosity: the elements, or the patch values as S = 1 (a grey one-channel
+    result is repeated into three)."""
     if solution.element_radiosity is not None:
-        return np.asarray(solution.element_radiosity, dtype=np.float64)
-    return np.asarray(solution.patch_radiosity, dtype=np.float64)[:, None, None, :]
+        values = np.asarray(solution.element_radiosity, dtype=np.float64)
+    else:
+        values = np.asarray(solution.patch_radiosity, dtype=np.float64)[:, None, None, :]
+    return np.broadcast_to(values, values.shape[:3] + (3,)) if values.shape[3] == 1 else values
 
 
 def lattice_parameters(elements: int) -> np.ndarray:
@@ -74,16 +82,40 @@ def lattice_parameters(elements: int) -> np.ndarray:
     return np.concatenate([[0.0], (np.arange(elements) + 0.5) / elements, [1.0]])
 
 
-def continuous_lattice(corners: np.ndarray, patch_uv: np.ndarray, values: np.ndarray,
-                       group: np.ndarray, world_quantum: float, uv_quantum: float) -> np.ndarray:
+def _sum_within_groups(group: np.ndarray, joins, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For every item i, the sum of values[j] and the count over the items j of its group with
+    joins(i, j) true (each item joins itself). Items are compared at every offset within their
+    group: a loop over the largest group size (a handful), vectorized over all items."""
+    order = np.argsort(group, kind="stable")
+    sorted_group = group[order]
+    total, count = values.copy(), np.ones(len(group))
+    for offset in range(1, len(group)):
+        same = sorted_group[offset:] == sorted_group[:-offset]
+        if not same.any():
+            break
+        i, j = order[:-offset][same], order[offset:][same]
+        joined = joins(i, j)
+        i, j = i[joined], j[joined]
+        np.add.at(total, i, values[j])
+        np.add.at(total, j, values[i])
+        np.add.at(count, i, 1)
+        np.add.at(count, j, 1)
+    return total, count
+
+
+def continuous_lattice(corners: np.ndarray, patch_uv: np.ndarray, values: np.ndarray, group: np.ndarray,
+                       normals: np.ndarray, world_quantum: float, uv_quantum: float) -> np.ndarray:
     """(P, S+2, S+2, 3) lattice values [patch, t row, s column].
 
-    Inside: the element values. Border points: each patch first proposes its
-    nearest element's value (averaged over its own lattice points at the same
-    place, e.g. along a triangle's collapsed edge), then every place takes the
-    mean of the proposals of the patches meeting there. Places are matched by
-    quantized world position, UV position and `group` (the object), so values
-    are shared exactly where the images are continuous: within a chart."""
+    Inside: the element values. Border points: each patch proposes its nearest
+    element's value there (one proposal per patch and place: its own lattice
+    points at one place, e.g. along a triangle's collapsed edge, are averaged
+    first); then a patch's border value is the mean of the proposals of the
+    patches of its `group` (object) at the same world point that either share
+    the UV point there (same chart: the image must be continuous) or bend
+    from it by less than SMOOTH_EDGE_DEGREES (a smooth surface split into
+    faces, e.g. Blender's Lightmap Pack making each face its own chart: no
+    seams between them). Creases keep their own values: light differs there."""
     count, elements = values.shape[:2]
     clamp = np.clip(np.arange(elements + 2) - 1, 0, elements - 1)
     lattice = values[:, clamp][:, :, clamp].copy()
@@ -91,28 +123,31 @@ def continuous_lattice(corners: np.ndarray, patch_uv: np.ndarray, values: np.nda
     s, t = np.meshgrid(params, params)  # [t row, s column]
     border = np.ones_like(s, dtype=bool)
     border[1:-1, 1:-1] = False
-    world = bilinear(corners, s[border], t[border])  # (P, B, 3)
-    uv = bilinear(patch_uv, s[border], t[border])
-    per_point = border.sum()
-    keys = np.concatenate([
-        np.repeat(group, per_point)[:, None],
-        np.round(world.reshape(-1, 3) / world_quantum),
-        np.round(uv.reshape(-1, 2) / uv_quantum),
-    ], axis=1).astype(np.int64)
-    _, place = np.unique(keys, axis=0, return_inverse=True)
+    per_patch = int(border.sum())
+    world = np.round(bilinear(corners, s[border], t[border]).reshape(-1, 3) / world_quantum)
+    uv = np.round(bilinear(patch_uv, s[border], t[border]).reshape(-1, 2) / uv_quantum)
+    owner = np.repeat(np.arange(count), per_patch)
+    keys = np.concatenate([group[owner][:, None], world, uv], axis=1).astype(np.int64)
+    _, place = np.unique(keys, axis=0, return_inverse=True)  # same object, world and UV point
     place = place.ravel()
-    places = place.max() + 1
+    _, pair_of_point = np.unique(owner * (place.max() + 1) + place, return_inverse=True)
+    pair_of_point = pair_of_point.ravel()
+    points_per_pair = np.bincount(pair_of_point)
     proposals = lattice[:, border].reshape(-1, 3)
-    owner = np.repeat(np.arange(count), per_point)
-    pairs, pair_of_point = np.unique(owner * places + place, return_inverse=True)
-    pair_weight = np.bincount(pair_of_point)
     pair_value = np.stack([np.bincount(pair_of_point, proposals[:, c]) for c in range(3)], axis=1)
-    pair_value /= pair_weight[:, None]
-    place_of_pair = pairs % places
-    place_count = np.bincount(place_of_pair, minlength=places)
-    place_value = np.stack([np.bincount(place_of_pair, pair_value[:, c], minlength=places) for c in range(3)], axis=1)
-    place_value /= np.maximum(place_count, 1)[:, None]
-    lattice[:, border] = place_value[place].reshape(count, per_point, 3)
+    pair_value /= points_per_pair[:, None]
+    first = np.zeros(len(points_per_pair), dtype=np.int64)
+    first[pair_of_point[::-1]] = np.arange(len(pair_of_point))[::-1]  # a point of each pair
+    pair_patch, pair_place = owner[first], place[first]
+    _, pair_world = np.unique(keys[first, :4], axis=0, return_inverse=True)  # object and world point
+    smooth = math.cos(math.radians(SMOOTH_EDGE_DEGREES))
+
+    def joins(i, j):
+        return (pair_place[i] == pair_place[j]) | (
+            np.einsum("ij,ij->i", normals[pair_patch[i]], normals[pair_patch[j]]) > smooth)
+
+    total, joined = _sum_within_groups(pair_world.ravel(), joins, pair_value)
+    lattice[:, border] = (total / joined[:, None])[pair_of_point].reshape(count, per_patch, 3)
     return lattice
 
 
@@ -120,8 +155,12 @@ def resolve_size(natural: tuple[int, int], override, max_size: int, power_of_two
                  object_name: str) -> tuple[int, int]:
     """Final (width, height): the override or the natural size, rounded and capped."""
     if override is not None:
-        size = (override, override) if isinstance(override, (int, np.integer)) else tuple(override)
-        if len(size) != 2 or any(int(n) != n or n < MIN_SIZE for n in size):
+        try:
+            size = (override, override) if isinstance(override, numbers.Real) else tuple(override)
+            valid = len(size) == 2 and all(int(n) == n >= MIN_SIZE for n in size)
+        except (TypeError, ValueError):
+            valid = False
+        if not valid:
             raise SolveError(f"object '{object_name}': lightmap resolution {override!r} must be an integer"
                              f" (or width, height) of at least {MIN_SIZE}")
         size = tuple(int(n) for n in size)
@@ -196,33 +235,33 @@ def _rasterize(ctx, corners_texels: np.ndarray, lattice: np.ndarray, size: tuple
         fbo.use()
         fbo.viewport = (0, 0, width, height)
         fbo.clear(depth=1.0)
-        ctx.disable(ctx.CULL_FACE | ctx.BLEND)
-        ctx.enable(ctx.DEPTH_TEST)
+        ctx.enable_only(ctx.DEPTH_TEST)  # no culling: mirrored UV charts wind clockwise
         ctx.depth_func = "<"
         corner_buffer.bind_to_storage_buffer(0)
         lattice_buffer.bind_to_storage_buffer(1)
         vao.render()
         values = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=0), dtype=np.float32)
         ids = np.frombuffer(fbo.read(components=1, dtype="i4", attachment=1), dtype=np.int32)
-        ctx.disable(ctx.DEPTH_TEST)
     finally:
         for resource in reversed(resources):
             resource.release()
     return values.reshape(height, width, 4)[..., :3], ids.reshape(height, width)
 
 
-def mip_chain(values: np.ndarray, covered: np.ndarray, gutter: int) -> list[np.ndarray]:
-    """RGBA float32 levels: each downsampled from the previous level's charts (not its gutter),
-    then dilated by `gutter` texels; the chain ends at the first odd size (GL halves sizes by
-    floor(w / 2), the coverage-aware mean by 2 x 2 blocks: they agree while sizes are even)."""
-    levels = []
+def mip_chain(values: np.ndarray, coverage: np.ndarray, gutter: int) -> tuple[list, list]:
+    """RGBA float32 levels and their chart coverage: each level is the coverage-weighted 2x2 mean
+    of the previous level's chart texels (not its gutter), so every level's coverage-weighted
+    mean is level 0's; then it is dilated by `gutter` texels. The chain ends at the first odd
+    size (GL halves sizes by floor(w / 2), this by 2 x 2 blocks: they agree while sizes are even)."""
+    levels, coverages = [], []
     while True:
-        filled, reached = dilate(values, covered, gutter)
+        filled, reached = dilate(values, coverage > 0, gutter)
         levels.append(np.concatenate([filled, reached[..., None]], axis=2).astype(np.float32))
-        h, w = covered.shape
+        coverages.append(coverage.astype(np.float32))
+        h, w = coverage.shape
         if max(h, w) == 1 or (h > 1 and h % 2) or (w > 1 and w % 2):
-            return levels
-        values, covered = downsample_covered(values, covered)  # a 1-texel axis stays 1
+            return levels, coverages
+        values, coverage = downsample_weighted(values, coverage)  # a 1-texel axis stays 1
 
 
 def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXEL_DENSITY,
@@ -245,8 +284,10 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
     scene_size = max(scene.diameter, 1e-30)
     pad = gutter + 1  # a chart's grazed texels, then its gutter
 
-    layouts, patch_uv = {}, np.array(patches.uv, dtype=np.float64)
+    layouts = {}
     object_of_surface = np.empty(len(scene.surfaces), dtype=np.int64)
+    laid_out = np.zeros(len(scene.surfaces), dtype=bool)  # surfaces given automatic UVs here
+    uv_maps = np.zeros((len(scene.surfaces), 2, 4))  # their affine maps: uv = M @ [x, y, z, 1]
     for number, (name, indices) in enumerate(objects.items()):
         object_of_surface[indices] = number
         if _given_uvs(scene, name, indices):
@@ -261,13 +302,17 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
             size = resolve_size(natural, overrides.get(name), max_size, power_of_two, name)
             scale = uv_layout.largest_fitting_scale(charts, size, pad, name)
             layout = uv_layout.place_charts(charts, size, scale, pad)
-            for i in indices:
-                on_surface = patches.surface == i
-                patch_uv[on_surface] = layout.surface_uv(i, patches.corners[on_surface])
+            laid_out[indices] = True
+            uv_maps[indices] = [layout.uv_maps[i] for i in indices]
             layouts[name] = (size, layout)
 
+    patch_uv = np.array(patches.uv, dtype=np.float64)
+    auto = laid_out[patches.surface]
+    maps = uv_maps[patches.surface[auto]]
+    patch_uv[auto] = np.einsum("pij,pkj->pki", maps[..., :3], patches.corners[auto]) + maps[:, None, :, 3]
+
     lattice = continuous_lattice(patches.corners, patch_uv, values, object_of_surface[patches.surface],
-                                 world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
+                                 patches.normal, world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
     lightmaps = {}
     with gl.gl_context(ctx) as gl_ctx:
         for name, indices in objects.items():
@@ -278,7 +323,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
             covered = signed_ids != 0
             inside = signed_ids > 0
             patch_index = np.where(inside, mine[np.maximum(signed_ids, 1) - 1], -1).astype(np.int32)
-            if not inside.any():
+            if not covered.any():
                 raise SolveError(f"object '{name}': its faces cover no texel of a {size[0]}x{size[1]}"
                                  " lightmap; raise the texel density or its resolution")
             if layout is None:
@@ -286,9 +331,11 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
             else:
                 surface_uv = {i: layout.surface_uv(i, scene.surfaces[i].vertices) for i in indices}
             area = sum(scene.surfaces[i].area for i in indices)
+            levels, coverage = mip_chain(texel_values.astype(np.float64), covered.astype(np.float64), gutter)
             lightmaps[name] = Lightmap(
                 object_name=name,
-                levels=mip_chain(texel_values.astype(np.float64), covered, gutter),
+                levels=levels,
+                coverage=coverage,
                 patch_index=patch_index,
                 surface_uv=surface_uv,
                 texel_density=math.sqrt(inside.sum() / area),

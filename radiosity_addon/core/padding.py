@@ -47,18 +47,26 @@ def dilate(values: np.ndarray, covered: np.ndarray, rings: int) -> tuple[np.ndar
     return values, covered
 
 
+def downsample_weighted(values: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Halve an image by 2x2 weighted means. weight (H, W) >= 0, e.g. the covered fraction of each
+    texel; the new weight is the children's mean weight, so chaining levels keeps every level's
+    weighted mean equal to the first one's. Odd sizes are padded with weight-0 texels."""
+    h, w = weight.shape
+    ph, pw = h + h % 2, w + w % 2
+    padded_values = np.zeros((ph, pw, values.shape[2]))
+    padded_weight = np.zeros((ph, pw))
+    padded_weight[:h, :w] = weight
+    padded_values[:h, :w] = np.where(weight[..., None] > 0, values, 0) * weight[..., None]
+    weight_sum = padded_weight.reshape(ph // 2, 2, pw // 2, 2).sum(axis=(1, 3))
+    total = padded_values.reshape(ph // 2, 2, pw // 2, 2, -1).sum(axis=(1, 3))
+    level = np.where(weight_sum[..., None] > 0, total / np.where(weight_sum > 0, weight_sum, 1)[..., None], 0.0)
+    return level, weight_sum / 4
+
+
 def downsample_covered(values: np.ndarray, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Halve an image by 2x2 coverage-weighted means; a texel is covered if any child is.
     Odd sizes are padded with uncovered texels."""
-    h, w = covered.shape
-    ph, pw = h + h % 2, w + w % 2
-    padded_values = np.zeros((ph, pw, values.shape[2]))
-    padded_covered = np.zeros((ph, pw))
-    padded_values[:h, :w] = np.where(covered[..., None], values, 0)
-    padded_covered[:h, :w] = covered
-    weight = padded_covered.reshape(ph // 2, 2, pw // 2, 2).sum(axis=(1, 3))
-    total = padded_values.reshape(ph // 2, 2, pw // 2, 2, -1).sum(axis=(1, 3))
-    level = np.where(weight[..., None] > 0, total / np.maximum(weight, 1)[..., None], 0.0)
+    level, weight = downsample_weighted(values, covered.astype(np.float64))
     return level, weight > 0
 
 

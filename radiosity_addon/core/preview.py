@@ -7,8 +7,10 @@ The picture is rendered `supersample` times larger and box-filtered down.
 
 Tone map (the PNG): `srgb(clamp(radiance × exposure, 0, 1))`, with sRGB's
 piecewise encoding and rounding to 8 bits. Without an explicit exposure, it
-is chosen so that the 99th percentile of the luminance (Rec. 709 weights) of
-non-emitting surfaces maps to 1: lit walls fill the range and emitters clip.
+is chosen so that the 99.9th percentile of the largest colour channel of
+non-emitting surfaces maps to 1: lit surfaces fill the range without clipping
+(clipping one channel would shift their hue, and with it the colour bleeding
+the picture is meant to show), while emitters clip to white-ish.
 
 PNGs are written with zlib and struct only (no imaging library in the core).
 """
@@ -26,8 +28,7 @@ import numpy as np
 from . import gl
 from .scene import Scene, SceneError
 
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
-EXPOSURE_PERCENTILE = 99.0
+EXPOSURE_PERCENTILE = 99.9
 
 
 @dataclass
@@ -142,7 +143,7 @@ def render_preview(scene: Scene, lightmaps: dict, camera: Camera | None = None, 
             fbo.use()
             fbo.viewport = (0, 0, big_w, big_h)
             fbo.clear(depth=1.0)
-            gl_ctx.enable(gl_ctx.DEPTH_TEST | gl_ctx.CULL_FACE)
+            gl_ctx.enable_only(gl_ctx.DEPTH_TEST | gl_ctx.CULL_FACE)  # only fronts emit and receive
             gl_ctx.front_face = "ccw"
             gl_ctx.depth_func = "<"
             for name, vertices in _surface_triangles(scene, lightmaps).items():
@@ -155,7 +156,6 @@ def render_preview(scene: Scene, lightmaps: dict, camera: Camera | None = None, 
                     resource.release()
             radiance = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=0), dtype=np.float32)
             ids = np.frombuffer(fbo.read(components=1, dtype="i4", attachment=1), dtype=np.int32)
-            gl_ctx.disable(gl_ctx.DEPTH_TEST | gl_ctx.CULL_FACE)
         finally:
             for resource in reversed(resources):
                 resource.release()
@@ -168,11 +168,11 @@ def render_preview(scene: Scene, lightmaps: dict, camera: Camera | None = None, 
 
 
 def auto_exposure(scene: Scene, preview: Preview) -> float:
-    """Exposure mapping the EXPOSURE_PERCENTILE luminance of non-emitting surfaces to 1."""
+    """Exposure mapping the EXPOSURE_PERCENTILE of non-emitting surfaces' largest channel to 1."""
     emitting = np.array([bool(np.any(s.emission > 0)) for s in scene.surfaces] + [True])  # [-1]: background
     lit = ~emitting[preview.surface_index]
-    luminance = preview.radiance[lit] @ LUMINANCE
-    reference = np.percentile(luminance, EXPOSURE_PERCENTILE) if luminance.size else 0.0
+    brightest_channel = preview.radiance[lit].max(axis=-1)
+    reference = np.percentile(brightest_channel, EXPOSURE_PERCENTILE) if brightest_channel.size else 0.0
     return 1.0 / reference if reference > 0 else 1.0
 
 

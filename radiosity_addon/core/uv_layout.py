@@ -53,14 +53,16 @@ def group_charts(surfaces: list[Surface], indices: list[int], scene_size: float)
             i = parent[i]
         return i
 
+    # a chart keeps its first surface's normal, so gentle bends cannot add up along a chain of
+    # faces into a curved chart that its projection would fold
+    chart_normal = {i: surfaces[i].normal for i in indices}
     owner_of_edge: dict[tuple, int] = {}
     for i in indices:
         for key in _edge_keys(surfaces[i], quantum):
             j = owner_of_edge.setdefault(key, i)
-            if j == i:
-                continue
-            if surfaces[i].normal @ surfaces[j].normal > FLAT_COSINE:
-                parent[root(i)] = root(j)
+            a, b = root(i), root(j)
+            if a != b and chart_normal[a] @ chart_normal[b] > FLAT_COSINE:
+                parent[a] = b
     groups: dict[int, list[int]] = {}
     for i in indices:
         groups.setdefault(root(i), []).append(i)
@@ -81,17 +83,21 @@ def _chart(surfaces: list[Surface], members: list[int]) -> _Chart:
     normal = surfaces[members[0]].normal
     points = np.concatenate([surfaces[i].vertices for i in members])
     edges = np.concatenate([np.roll(surfaces[i].vertices, -1, axis=0) - surfaces[i].vertices for i in members])
-    edges -= np.outer(edges @ normal, normal)
-    edges = edges[np.linalg.norm(edges, axis=1) > 0]
-    best = None
-    for edge in edges:
-        u = edge / np.linalg.norm(edge)
-        axes = np.stack([u, np.cross(normal, u)])  # (u, v, normal) right-handed: seen from the front
-        coords = points @ axes.T
-        low, high = coords.min(axis=0), coords.max(axis=0)
-        if best is None or np.prod(high - low) < np.prod(best[2] - best[1]) * (1 - 1e-9):
-            best = axes, low, high
-    axes, low, high = best
+    first = edges[np.argmax(np.linalg.norm(edges, axis=1))]
+    first = first - (first @ normal) * normal  # other members may tilt off the plane slightly
+    base = np.stack([first, np.cross(normal, first)]) / np.linalg.norm(first)  # an in-plane frame
+    flat = edges @ base.T
+    flat = flat[np.linalg.norm(flat, axis=1) > 0]
+    # box orientations repeat every 90°: one candidate per distinct edge angle (a grid has few)
+    angles = np.unique(np.round(np.mod(np.arctan2(flat[:, 1], flat[:, 0]), np.pi / 2), 6))
+    directions = np.stack([np.cos(angles), np.sin(angles)], axis=1) @ base  # (D, 3) unit u axes
+    u_coords = points @ directions.T  # (n, D)
+    v_coords = points @ np.cross(normal, directions).T  # (u, v, normal) right-handed: seen from the front
+    areas = np.ptp(u_coords, axis=0) * np.ptp(v_coords, axis=0)
+    best = int(np.argmin(areas))
+    axes = np.stack([directions[best], np.cross(normal, directions[best])])
+    coords = points @ axes.T
+    low, high = coords.min(axis=0), coords.max(axis=0)
     extent = high - low
     if extent[1] > extent[0]:  # landscape charts pack better on shelves; a 90° turn keeps the front
         axes, extent = np.stack([axes[1], -axes[0]]), extent[::-1]
