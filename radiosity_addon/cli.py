@@ -49,6 +49,9 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
                        help="progressive visibility variant (default search)")
     group.add_argument("--visibility-res", type=int, default=defaults.visibility_res, metavar="R",
                        help=f"pixels across the progressive visibility map (default {defaults.visibility_res})")
+    group.add_argument("--shoot-from", choices=("centroid", "centre"), default=defaults.shoot_from,
+                       help="progressive: render each shooter's visibility map from the centroid of its unshot"
+                            " power (default) or from its centre")
     group.add_argument("--kernel", choices=("exact", "disk"), default=defaults.kernel,
                        help="progressive form-factor kernel: exact point-to-polygon (default) or the disk"
                             " approximation")
@@ -59,7 +62,7 @@ def settings_from_args(args) -> SolveSettings:
         method=args.method, subdiv=args.subdiv, elements=args.elements, hemicube_res=args.hemicube_res,
         solver=args.solver, tolerance=args.tolerance, max_iterations=args.max_iterations,
         max_shots=args.max_shots, visibility=args.visibility, kernel=args.kernel,
-        visibility_res=args.visibility_res,
+        visibility_res=args.visibility_res, shoot_from=args.shoot_from,
     )
 
 

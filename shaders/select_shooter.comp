@@ -4,18 +4,22 @@
 // (one texel per tile), so power = area * mean. One work group scans all
 // patches and reduces in shared memory; the result is a few numbers:
 //   best power, best patch, its mean residual, the total unshot power (RGB),
-//   and the energy sums of the previous shot (which it resets).
+//   the bilinear parameters (s, t) of its unshot power's centroid (where its
+//   visibility map is rendered from: a patch half hidden under a box then
+//   shoots from its lit part), and the energy sums of the previous shot
+//   (which it resets).
 layout(local_size_x = 256) in;
 
 uniform sampler2D residual;
 uniform int level;
 uniform int patch_count;
 uniform int tiles_per_row;
+uniform int elements;  // S
 
 layout(std430, binding = 1) readonly buffer Patch { vec4 normal_area[]; };
 layout(std430, binding = 4) buffer Energy { uint energy[4]; };
 layout(std430, binding = 6) writeonly buffer Result {
-    vec4 best;          // power score, patch index (as float bits), 0, 0
+    vec4 best;          // power score, patch index (as float bits), power centroid s, t
     vec4 best_residual; // mean residual radiosity of the best patch
     vec4 unshot;        // total unshot power per channel
     vec4 last_shot;     // previous shot: hit fraction, reflected fraction per channel
@@ -60,7 +64,17 @@ void main() {
     }
     if (id == 0) {
         int p = max(best_index[0], 0);
-        best = vec4(best_score[0], intBitsToFloat(best_index[0]), 0.0, 0.0);
+        ivec2 origin = ivec2(p % tiles_per_row, p / tiles_per_row) * elements;
+        vec3 power_centre = vec3(0.0);  // weighted s, t and weight
+        for (int j = 0; j < elements; ++j) {
+            for (int i = 0; i < elements; ++i) {
+                vec3 r = texelFetch(residual, origin + ivec2(i, j), 0).rgb;
+                float w = r.r + r.g + r.b;
+                power_centre += w * vec3((float(i) + 0.5) / float(elements), (float(j) + 0.5) / float(elements), 1.0);
+            }
+        }
+        vec2 st = power_centre.z > 0.0 ? power_centre.xy / power_centre.z : vec2(0.5);
+        best = vec4(best_score[0], intBitsToFloat(best_index[0]), st);
         best_residual = texelFetch(residual, ivec2(p % tiles_per_row, p / tiles_per_row), level);
         unshot = vec4(total[0], 0.0);
         last_shot = vec4(energy[0], energy[1], energy[2], energy[3]) / ENERGY_ONE;

@@ -254,13 +254,22 @@ def test_visibility_search_misclassifies_fewer_elements_than_plain(ctx):
 
 
 def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(ctx):
+    """Per-surface mean radiosity, progressive (subdiv 6, 2x2 elements) vs hemi-cube (subdiv 8).
+
+    Within 5 % on every surface but the short block's sides, which are lit mostly by floor
+    patches that run under the block: both methods treat such a patch as one shooter, and they
+    converge to each other only with finer patches (measured worst side: 10 % at subdiv 4, 6.6 %
+    at 6, 2-5 % at 8; hemi-cube 8 vs 12 differs by 6 % there itself). Those get 10 %.
+    """
     scene = load_scene("cornell-box")
     hemicube = solve(scene, SolveSettings(method="hemicube", subdiv=8, hemicube_res=128), ctx=ctx)
     progressive = solve(scene, SolveSettings(subdiv=6, elements=2, tolerance=1e-2), ctx=ctx)
     reference = face_means(hemicube)
     difference = np.abs(face_means(progressive) - reference).max(axis=1) / reference.max(axis=1)
-    worst = int(np.argmax(difference))
-    assert difference.max() < 0.05, f"{scene.surfaces[worst].name}: {difference.max():.3f}"
+    names = [s.name for s in scene.surfaces]
+    limits = np.array([0.10 if name.startswith("short_block_side") else 0.05 for name in names])
+    report = ", ".join(f"{n} {d:.3f}" for n, d in zip(names, difference))
+    assert np.all(difference < limits), report
 
 
 def test_cancel_and_shot_budget(ctx):

@@ -123,7 +123,8 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
             if shots >= max_shots:
                 stop_reason = "max_shots"
                 break
-            shooter = patch_shooter(patches, selection.patch, selection.residual)
+            shooter = patch_shooter(patches, selection.patch, selection.residual,
+                                    selection.centroid if settings.shoot_from == "centroid" else None)
             ledger.pending = shooter.power
             with timer.stage("visibility"):
                 visibility_map.render(shooter.position, shooter.axes, skip_patch=shooter.patch)
@@ -150,7 +151,7 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
         "readback_per_shot": READBACK,
         "visibility": {"variant": variant, "resolution": resolution,
                        "tessellation": VARIANTS[variant].tessellation,
-                       "search_radius": VARIANTS[variant].search_radius},
+                       "search_radius": VARIANTS[variant].search_radius, "from": settings.shoot_from},
         "kernel": settings.kernel,
         "elements_per_patch": settings.elements,
         "shots_per_second": shots / solve_seconds if solve_seconds > 0 else None,

@@ -17,10 +17,11 @@ import numpy as np
 
 from . import gl
 from .element_textures import ElementTextures
-from .patches import Patches
+from .patches import Patches, bilinear
 from .visibility import VisibilityMap, frame_from_normal
 
-READBACK = ("64 bytes per shot: best patch power and index, its mean residual (RGB), total unshot power (RGB),"
+READBACK = ("64 bytes per shot: best patch power and index, its unshot power centroid (s, t), its mean residual"
+            " (RGB), total unshot power (RGB),"
             " and the previous shot's hit and reflected fractions (fixed point sums)")
 ENERGY_BINDING = 4
 
@@ -39,11 +40,18 @@ class Shooter:
         return self.area * self.radiosity
 
 
-def patch_shooter(patches: Patches, index: int, radiosity: np.ndarray) -> Shooter:
+def patch_shooter(patches: Patches, index: int, radiosity: np.ndarray, eye_parameters=None) -> Shooter:
+    """Patch `index` shooting `radiosity`; its visibility map is rendered from its centre, or from
+    the bilinear point at `eye_parameters` (s, t) (the centroid of its unshot power)."""
     normal = patches.normal[index]
     edge = patches.corners[index, 1] - patches.corners[index, 0]
     x, y = frame_from_normal(normal, edge)
-    return Shooter(position=patches.center[index], axes=(x, y, normal), polygon=patches.corners[index],
+    if eye_parameters is None:
+        position = patches.center[index]
+    else:
+        position = bilinear(patches.corners[index:index + 1], np.float64(eye_parameters[0]),
+                            np.float64(eye_parameters[1]))[0]
+    return Shooter(position=position, axes=(x, y, normal), polygon=patches.corners[index],
                    area=float(patches.area[index]), radiosity=np.asarray(radiosity, dtype=np.float64), patch=index)
 
 
@@ -52,6 +60,7 @@ class Selection:
     patch: int  # -1 when nothing is left to shoot
     score: float
     residual: np.ndarray  # (3,) mean unshot radiosity of that patch
+    centroid: np.ndarray  # (2,) bilinear (s, t) of that patch's unshot power centroid
     unshot: np.ndarray  # (3,) total unshot power
     last_shot: np.ndarray  # (4,) previous shot: hit fraction, reflected fraction per channel
 
@@ -85,6 +94,7 @@ class Selector:
         self.program["level"] = layout.level
         self.program["patch_count"] = layout.patch_count
         self.program["tiles_per_row"] = layout.residual_tiles_per_row
+        self.program["elements"] = layout.elements
         self.program["residual"] = 0
         self.result = ctx.buffer(reserve=64)
 
@@ -99,6 +109,7 @@ class Selector:
         index = int(np.frombuffer(raw[1].tobytes(), dtype=np.int32)[0])
         score = float(raw[0])
         return Selection(patch=index if score > 0 else -1, score=score, residual=raw[4:7].astype(np.float64),
+                         centroid=raw[2:4].astype(np.float64),
                          unshot=raw[8:11].astype(np.float64), last_shot=raw[12:16].astype(np.float64))
 
     def release(self) -> None:

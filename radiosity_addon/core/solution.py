@@ -36,6 +36,7 @@ class SolveSettings:
     visibility: str = "search"  # progressive: plain | tessellated | search
     kernel: str = "exact"  # progressive: exact | disk
     visibility_res: int = 512  # progressive: pixels across the hemispherical visibility map
+    shoot_from: str = "centroid"  # progressive: visibility map from the unshot power's centroid | centre
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
 
     @property
@@ -57,6 +58,8 @@ class SolveSettings:
             raise SolveError(f"unknown visibility variant '{self.visibility}' (choose plain, tessellated, search)")
         if self.kernel not in ("exact", "disk"):
             raise SolveError(f"unknown kernel '{self.kernel}' (choose exact, disk)")
+        if self.shoot_from not in ("centroid", "centre"):
+            raise SolveError(f"unknown shooting point '{self.shoot_from}' (choose centroid, centre)")
         if not 16 <= self.visibility_res <= 8192:
             raise SolveError("visibility map resolution must lie between 16 and 8192 pixels")
         if not 0 < self.effective_tolerance < 1:
