@@ -137,3 +137,51 @@ def test_materials_become_reflectance_and_emission_with_warnings_for_what_cannot
     reflectance, _ = reader.colours(white)
     assert reflectance.max() < 1
     assert any("white" in w and "capped" in w for w in reader.warnings)
+
+
+class RecordingLayout:
+    """Stands in for bpy's UILayout: records what the panel draws and checks each property exists."""
+
+    def __init__(self, log):
+        self.log = log
+        self.use_property_split = self.use_property_decorate = self.enabled = False
+        self.scale_y = 1.0
+
+    def _child(self, *args, **kwargs):
+        return RecordingLayout(self.log)
+
+    row = column = box = split = _child
+
+    def prop(self, data, name, **kwargs):
+        assert name in data.bl_rna.properties, f"no property {name!r} on {data}"
+        self.log.append(("prop", name))
+
+    def operator(self, idname, **kwargs):
+        category, name = idname.split(".")
+        assert hasattr(getattr(bpy.ops, category), name), idname
+        self.log.append(("operator", idname))
+
+    def label(self, **kwargs):
+        self.log.append(("label", kwargs.get("text")))
+
+    def progress(self, **kwargs):
+        self.log.append(("progress", kwargs.get("factor")))
+
+    def separator(self, **kwargs):
+        pass
+
+
+@pytest.mark.parametrize("method", ["progressive", "hemicube"])
+def test_panel_draws_the_settings_of_the_chosen_method_and_the_bake_button(method):
+    from radiosity_addon.blender.panel import RENDER_PT_radiosity_bake
+
+    support.open_blend(support.CORNELL, method=method)
+    bpy.context.view_layer.objects.active = bpy.data.objects["floor"]
+    log = []
+    panel = SimpleNamespace(layout=RecordingLayout(log))
+    RENDER_PT_radiosity_bake.draw(panel, bpy.context)
+    drawn = [name for kind, name in log if kind == "prop"]
+    assert ("operator", "radiosity.bake") in log and ("operator", "radiosity.remove_bake") in log
+    assert "lightmap_resolution" in drawn and "texel_density" in drawn and "output" in drawn
+    assert ("elements" in drawn) == (method == "progressive")
+    assert ("solver" in drawn) == (method == "hemicube")
