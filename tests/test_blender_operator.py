@@ -84,6 +84,12 @@ def test_only_selected_objects_get_lightmaps_and_unselected_ones_still_light_the
     assert "Lightmap" not in bpy.data.objects["ceiling"].data.uv_layers
     rgba = support.image_rgba(bpy.data.images["floor_lightmap"])
     assert rgba[..., :3][rgba[..., 3] > 0].max() > 0  # lit by the unselected light
+    # the floor's material is shared with unbaked walls: the floor shows a copy, the walls the original
+    floor_material = floor.material_slots[0].material
+    ceiling_material = bpy.data.objects["ceiling"].material_slots[0].material
+    assert floor_material is not ceiling_material
+    assert support.lightmap_wiring(floor_material)["image"] == "floor_lightmap"
+    assert support.lightmap_wiring(ceiling_material) is None
 
     support.open_blend(support.CORNELL)
     bpy.context.scene.radiosity.include_unselected = False

@@ -99,7 +99,13 @@ def finish(plan: BakePlan) -> str:
     except BaseException:
         rollback(plan)
         raise
-    apply.show_lightmaps(plan.objects, written)
+    try:
+        apply.show_lightmaps(plan.objects, written)
+    except BaseException:  # a bug: better unbaked and consistent than half wired
+        for obj in plan.objects:
+            apply.remove_bake(obj)
+        rollback(plan)
+        raise
     seconds = time.monotonic() - plan.started
     counts = report.get("counts", {})
     return (f"baked {len(plan.objects)} object(s) in {seconds:.1f} s ({report.get('method')},"
