@@ -54,7 +54,7 @@ def chosen_objects(names: str | None) -> list:
     return [obj for obj in view_layer.objects if obj.type == "MESH" and obj.visible_get()]
 
 
-def render_preview(path: Path, samples: int = 8, scale_percent: int = 50) -> None:
+def render_preview(path: Path, size: int = 256, samples: int = 8) -> None:
     """A still from the file's camera with Cycles on the CPU: the baked lightmaps are emission,
     so a few samples give a clean picture."""
     scene = bpy.context.scene
@@ -64,7 +64,9 @@ def render_preview(path: Path, samples: int = 8, scale_percent: int = 50) -> Non
     scene.cycles.device = "CPU"
     scene.cycles.samples = samples
     scene.cycles.use_denoising = False
-    scene.render.resolution_percentage = scale_percent
+    # `size` is the longer side; the file's aspect ratio is kept
+    longest = max(scene.render.resolution_x, scene.render.resolution_y)
+    scene.render.resolution_percentage = max(1, min(100, round(100 * size / longest)))
     scene.render.image_settings.file_format = "PNG"
     scene.view_settings.view_transform = "Standard"
     scene.render.filepath = str(path)
@@ -74,7 +76,7 @@ def render_preview(path: Path, samples: int = 8, scale_percent: int = 50) -> Non
 
 def bake_file(blend: str, solve_settings: SolveSettings, objects: str | None = None, output_dir: str | None = None,
               save_as: str | None = None, preview: str | None = None, texel_density: float | None = None,
-              max_resolution: int | None = None, progress=None) -> str:
+              max_resolution: int | None = None, preview_size: int = 256, progress=None) -> str:
     """Bake FILE.blend; returns the summary line. User errors raise BakeError (one line)."""
     path = Path(blend)
     if not path.is_file():
@@ -97,7 +99,7 @@ def bake_file(blend: str, solve_settings: SolveSettings, objects: str | None = N
         target.parent.mkdir(parents=True, exist_ok=True)
         bpy.ops.wm.save_as_mainfile(filepath=str(target), relative_remap=True)
     if preview is not None:
-        render_preview(Path(preview).resolve())
+        render_preview(Path(preview).resolve(), preview_size)
     return summary
 
 
