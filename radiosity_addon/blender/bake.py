@@ -18,7 +18,7 @@ from . import apply
 from .errors import BakeError
 from .export import export_scene
 from .lightmap_uv import add_lightmap_uvs, remove_lightmap_uvs
-from .worker import BakeWorker, LightmapOptions
+from .worker import BakeWorker
 
 # errors the user can cause: reported as their message, one line
 USER_ERRORS = (BakeError, SceneError, SolveError, GLUnavailable, FileNotFoundError)
