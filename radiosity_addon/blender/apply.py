@@ -12,6 +12,7 @@ Image Texture node can show only one object's lightmap).
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import bpy
@@ -55,6 +56,12 @@ def _save_exr(image, path: Path) -> None:
             pass
 
 
+def file_name(name: str) -> str:
+    """An object name as a file name on every platform (Blender allows '/', ':' and more in names)."""
+    cleaned = re.sub(r'[<>:"/\\|?*\x00-\x1f]', "_", name).strip(" .")
+    return cleaned or "unnamed"
+
+
 def write_images(images: dict, output: str, directory: Path | None) -> dict:
     """Make and store every lightmap; on success replace the old images and return name -> image.
     output: 'PACK' or 'EXR' (into `directory`)."""
@@ -65,7 +72,7 @@ def write_images(images: dict, output: str, directory: Path | None) -> dict:
             image = _new_image(final_name + PENDING_SUFFIX, rgba)
             made[object_name] = image
             if output == "EXR":
-                _save_exr(image, Path(directory) / f"{final_name}.exr")
+                _save_exr(image, Path(directory) / f"{file_name(final_name)}.exr")
             else:
                 image.pack()
     except (RuntimeError, OSError) as error:
