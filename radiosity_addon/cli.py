@@ -170,6 +170,7 @@ def command_bake(args) -> int:
     summary = bake_file(args.file, settings_from_args(args), objects=args.objects, output_dir=args.output_dir,
                         save_as=args.save_as, preview=args.preview, texel_density=args.texel_density,
                         max_resolution=args.max_lightmap_size, preview_size=args.preview_size,
+                        patch_size=args.patch_size,
                         progress=(lambda p: progress(p.fraction, p.message, {})) if progress else None)
     PROGRESS.end()
     print(summary)
@@ -211,6 +212,9 @@ def build_parser() -> argparse.ArgumentParser:
                              help="save the file with the lightmaps applied (packed unless --output-dir)")
     bake_parser.add_argument("--preview", metavar="OUT.png",
                              help="render the baked file from its camera (Cycles, CPU, a few samples)")
+    bake_parser.add_argument("--patch-size", type=float, metavar="S",
+                             help="split faces into patches about S metres across, small faces staying whole"
+                                  " (instead of --subdiv's N x N for every face)")
     bake_parser.add_argument("--preview-size", type=int, default=256, metavar="N",
                              help="longer side of the preview in pixels, at most the file's render size"
                                   " (default 256)")

@@ -35,6 +35,7 @@ def open_blend(path: Path, method: str = "hemicube", subdivision: int = 2):
     bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
     settings = bpy.context.scene.radiosity
     settings.method = method
+    settings.patch_mode = "SUBDIVISION"
     settings.subdivision = subdivision
     settings.hemicube_resolution = 32
     settings.texel_density = 32.0

@@ -191,3 +191,44 @@ def test_panel_draws_the_settings_of_the_chosen_method_and_the_bake_button(metho
     assert "lightmap_resolution" in drawn and "texel_density" in drawn and "output" in drawn
     assert ("elements" in drawn) == (method == "progressive")
     assert ("solver" in drawn) == (method == "hemicube")
+
+
+def test_patch_size_splits_big_faces_and_keeps_small_ones_whole():
+    from radiosity_addon.blender.export import export_scene
+    from radiosity_addon.blender.lightmap_uv import add_lightmap_uvs
+
+    context = support.open_blend(support.ROOM)
+    objects = [obj for obj in context.scene.objects if obj.type == "MESH"]
+    add_lightmap_uvs(objects, 0.1)
+    depsgraph = context.evaluated_depsgraph_get()
+    whole = export_scene(depsgraph, objects, [], patch_size=0.0).scene
+    split = export_scene(depsgraph, objects, [], patch_size=0.5).scene
+
+    def uv_area(surface):
+        x, y = surface.uv[:, 0], surface.uv[:, 1]
+        return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+    for name in ("Room", "Table", "Pyramid", "Ceiling Light"):
+        before = [s for s in whole.surfaces if s.object_name == name]
+        after = [s for s in split.surfaces if s.object_name == name]
+        assert np.isclose(sum(s.area for s in after), sum(s.area for s in before), rtol=1e-9), name
+        assert np.isclose(sum(uv_area(s) for s in after), sum(uv_area(s) for s in before), rtol=1e-6), name
+        for surface in after:
+            edges = np.linalg.norm(np.roll(surface.vertices, -1, axis=0) - surface.vertices, axis=1)
+            assert edges.max() <= 0.5 + 1e-9, name
+    room_before = sum(s.object_name == "Room" for s in whole.surfaces)
+    room_after = sum(s.object_name == "Room" for s in split.surfaces)
+    assert room_before == 6 and room_after == 2 * (8 * 6 + 8 * 5 + 6 * 5)  # 4 x 3 x 2.5 m at 0.5 m
+    small = [s for s in whole.surfaces if s.object_name == "Table" and
+             np.linalg.norm(np.roll(s.vertices, -1, axis=0) - s.vertices, axis=1).max() <= 0.5]
+    assert small and all(any(s.vertices.shape == t.vertices.shape and np.allclose(s.vertices, t.vertices)
+                             for t in split.surfaces) for s in small)
+
+
+def test_patch_size_mode_bakes_through_the_operator():
+    support.open_blend(support.ROOM, method="hemicube")
+    settings = bpy.context.scene.radiosity
+    settings.patch_mode, settings.patch_size = "SIZE", 1.0
+    assert bpy.ops.radiosity.bake() == {"FINISHED"}
+    assert all(f"{obj.name}_lightmap" in bpy.data.images
+               for obj in bpy.context.scene.objects if obj.type == "MESH")

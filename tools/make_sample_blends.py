@@ -27,8 +27,19 @@ CORNELL_JSON = ROOT / "radiosity_addon/core/scenes/cornell-box.json"
 OUT_DIR = ROOT / "sample_blends"
 
 
+def register_addon() -> None:
+    """The add-on's settings are saved with the samples, so its properties must exist."""
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
+    if not hasattr(bpy.types.Scene, "radiosity"):
+        from radiosity_addon import blender
+
+        blender.register()
+
+
 def reset() -> None:
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    register_addon()
     bpy.context.preferences.filepaths.save_version = 0  # no .blend1 backups in the repository
     scene = bpy.context.scene
     scene.render.resolution_x = scene.render.resolution_y = 512
@@ -127,6 +138,8 @@ def make_cornell_box() -> Path:
     camera = data.get("camera", {"eye": [0.278, 0.273, -0.8], "forward": [0, 0, 1], "fov_y_degrees": 39.3076})
     assert camera["forward"] == [0, 0, 1], "the sample's camera rotation assumes the data looks along +z"
     add_camera(y_up_to_z_up(camera["eye"]), (90.0, 0.0, 180.0), camera["fov_y_degrees"])
+    # the box is 0.55 m wide: patches of 0.1 m rather than the default 0.5 m
+    bpy.context.scene.radiosity.patch_size = 0.1
     select_meshes()
     return save("cornell_box.blend")
 

@@ -68,7 +68,8 @@ def prepare(context, settings, objects=None, output_dir=None) -> BakePlan:
                      if obj.type == "MESH" and obj.name not in baked_names and obj.visible_get()]
     added = add_lightmap_uvs(baked, settings.uv_margin)
     try:
-        exported = export_scene(context.evaluated_depsgraph_get(), baked, occluders)
+        exported = export_scene(context.evaluated_depsgraph_get(), baked, occluders,
+                                patch_size=settings.patch_size if settings.patch_mode == "SIZE" else 0.0)
     except BaseException:
         remove_lightmap_uvs(added)
         raise

@@ -19,6 +19,7 @@ from .materials import MaterialReader
 from .tags import LIGHTMAP_UV
 
 DEGENERATE_AREA_FRACTION = 1e-10
+MAX_SPLIT = 64  # pieces along one edge of a face in the Patch Size mode
 OCCLUDER_UV = {3: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], 4: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]}
 
 
@@ -49,8 +50,47 @@ def _areas_and_bad_quads(corners: np.ndarray, quad: np.ndarray):
     return area, size, quad & (bent | concave)
 
 
+def split_face(vertices: np.ndarray, uv: np.ndarray, patch_size: float):
+    """A face as pieces about `patch_size` across (the Patch Size mode: big faces get many patches,
+    small ones stay whole). Quads split on a bilinear grid, triangles into n² triangles, the
+    same shapes the core's uniform subdivision makes, with UVs carried along."""
+    count = len(vertices)
+    edges = np.linalg.norm(np.roll(vertices, -1, axis=0) - vertices, axis=1)
+    if patch_size <= 0 or edges.max() <= patch_size:
+        return [(vertices, uv)]
+    if count == 4:
+        along_s = min(MAX_SPLIT, int(np.ceil(max(edges[0], edges[2]) / patch_size)))
+        along_t = min(MAX_SPLIT, int(np.ceil(max(edges[1], edges[3]) / patch_size)))
+        s = np.linspace(0.0, 1.0, along_s + 1)
+        t = np.linspace(0.0, 1.0, along_t + 1)
+
+        def at(corners, i, j):
+            return (corners[0] * (1 - s[i]) * (1 - t[j]) + corners[1] * s[i] * (1 - t[j])
+                    + corners[2] * s[i] * t[j] + corners[3] * (1 - s[i]) * t[j])
+
+        return [(np.array([at(vertices, i, j), at(vertices, i + 1, j), at(vertices, i + 1, j + 1),
+                           at(vertices, i, j + 1)]),
+                 np.array([at(uv, i, j), at(uv, i + 1, j), at(uv, i + 1, j + 1), at(uv, i, j + 1)]))
+                for j in range(along_t) for i in range(along_s)]
+    n = min(MAX_SPLIT, int(np.ceil(edges.max() / patch_size)))
+
+    def at(corners, i, r):
+        return corners[0] + (corners[1] - corners[0]) * i / n + (corners[2] - corners[0]) * r / n
+
+    pieces = []
+    for r in range(n):
+        for i in range(n - r):
+            corners = [(i, r), (i + 1, r), (i, r + 1)]
+            pieces.append(corners)
+            if i < n - r - 1:
+                pieces.append([(i + 1, r), (i + 1, r + 1), (i, r + 1)])
+    return [(np.array([at(vertices, i, r) for i, r in piece]), np.array([at(uv, i, r) for i, r in piece]))
+            for piece in pieces]
+
+
 class MeshExporter:
-    def __init__(self):
+    def __init__(self, patch_size: float = 0.0):
+        self.patch_size = patch_size
         self.materials = MaterialReader()
         self.warnings: list[str] = []
         self.entries: list[dict] = []
@@ -135,23 +175,25 @@ class MeshExporter:
             slot_index = int(material_index[face_polygon[index]])
             material = slots[slot_index].material if slot_index < len(slots) else None
             reflectance, emission = self.materials.colours(material)
-            entry = {
-                "name": f"{obj.name}#{len(self.entries)}",
-                "object": obj.name,
-                "vertices": positions[loop_vertex[face]].tolist(),
-                "reflectance": reflectance.tolist(),
-                "emission": emission.tolist(),
-            }
             # occluders get no image: overlapping unit-square UVs spare the core an automatic layout
-            entry["uv"] = uv[face].tolist() if uv is not None else OCCLUDER_UV[count]
-            self.entries.append(entry)
+            face_uv = uv[face] if uv is not None else np.array(OCCLUDER_UV[count])
+            for vertices, piece_uv in split_face(positions[loop_vertex[face]], face_uv, self.patch_size):
+                self.entries.append({
+                    "name": f"{obj.name}#{len(self.entries)}",
+                    "object": obj.name,
+                    "vertices": vertices.tolist(),
+                    "reflectance": reflectance.tolist(),
+                    "emission": emission.tolist(),
+                    "uv": piece_uv.tolist(),
+                })
         return int(valid.sum())
 
 
-def export_scene(depsgraph, baked, occluders) -> ExportedScene:
+def export_scene(depsgraph, baked, occluders, patch_size: float = 0.0) -> ExportedScene:
     """`baked`: mesh objects that get lightmaps (each needs a 'Lightmap' UV map); `occluders`: other
-    mesh objects that only take part in the light transport."""
-    exporter = MeshExporter()
+    mesh objects that only take part in the light transport. `patch_size` > 0 splits faces into
+    surfaces about that size (then solve with subdivision 1)."""
+    exporter = MeshExporter(patch_size)
     for obj in baked:
         exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=True)
     for obj in occluders:

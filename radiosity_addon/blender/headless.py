@@ -20,9 +20,15 @@ from .errors import BakeError
 class CommandLineSettings:
     """scene.radiosity with the solver settings replaced by the command line's (which has more knobs)."""
 
-    def __init__(self, scene_settings, solve_settings: SolveSettings, texel_density=None, max_resolution=None):
+    def __init__(self, scene_settings, solve_settings: SolveSettings, texel_density=None, max_resolution=None,
+                 patch_size=None):
         self._scene_settings = scene_settings
         self._solve_settings = solve_settings
+        # --patch-size splits faces in the export; without it --subdiv splits every face N x N
+        self.patch_mode = "SIZE" if patch_size else "SUBDIVISION"
+        self.patch_size = patch_size or 0.0
+        if patch_size:
+            solve_settings.subdiv = 1
         if texel_density is not None:
             scene_settings.texel_density = texel_density
         if max_resolution is not None:
@@ -76,7 +82,8 @@ def render_preview(path: Path, size: int = 256, samples: int = 8) -> None:
 
 def bake_file(blend: str, solve_settings: SolveSettings, objects: str | None = None, output_dir: str | None = None,
               save_as: str | None = None, preview: str | None = None, texel_density: float | None = None,
-              max_resolution: int | None = None, preview_size: int = 256, progress=None) -> str:
+              max_resolution: int | None = None, preview_size: int = 256, patch_size: float | None = None,
+              progress=None) -> str:
     """Bake FILE.blend; returns the summary line. User errors raise BakeError (one line)."""
     path = Path(blend)
     if not path.is_file():
@@ -86,7 +93,9 @@ def bake_file(blend: str, solve_settings: SolveSettings, objects: str | None = N
     bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
     ensure_registered()
     scene = bpy.context.scene
-    settings = CommandLineSettings(scene.radiosity, solve_settings, texel_density, max_resolution)
+    if patch_size is not None and not patch_size > 0:
+        raise BakeError(f"--patch-size must be positive, got {patch_size}")
+    settings = CommandLineSettings(scene.radiosity, solve_settings, texel_density, max_resolution, patch_size)
     if output_dir is None:
         scene.radiosity.output = "PACK"
     summary, warnings = bake_blocking(bpy.context, settings, objects=chosen_objects(objects),

@@ -33,7 +33,8 @@ class RENDER_PT_radiosity_bake(bpy.types.Panel):
         column = layout.column()
         column.enabled = plan is None
         column.prop(settings, "method")
-        column.prop(settings, "subdivision")
+        column.prop(settings, "patch_mode")
+        column.prop(settings, "patch_size" if settings.patch_mode == "SIZE" else "subdivision")
         if settings.method == "progressive":
             column.prop(settings, "elements")
         else:

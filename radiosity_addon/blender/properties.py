@@ -30,6 +30,12 @@ OUTPUT_ITEMS = [
 
 class RadiositySceneSettings(bpy.types.PropertyGroup):
     method: EnumProperty(name="Method", items=METHOD_ITEMS, default=_DEFAULTS.method)
+    patch_mode: EnumProperty(name="Patches", default="SIZE", items=[
+        ("SIZE", "Patch Size", "Split faces into patches about Patch Size across; smaller faces stay one patch"),
+        ("SUBDIVISION", "Subdivision", "Split every face N x N, however big or small"),
+    ])
+    patch_size: FloatProperty(name="Patch Size", min=0.001, soft_max=10.0, default=0.5, unit="LENGTH",
+                              description="Largest patch edge: faces longer than this are split")
     subdivision: IntProperty(name="Subdivision", min=1, soft_max=16, max=64, default=_DEFAULTS.subdiv,
                              description="Each face is split N x N into patches (triangles into N² triangles)")
     elements: EnumProperty(name="Elements", items=ELEMENT_ITEMS, default=str(_DEFAULTS.elements),
@@ -55,7 +61,8 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
                                                  " (they get no lightmap)")
 
     def solve_settings(self) -> SolveSettings:
-        return SolveSettings(method=self.method, subdiv=self.subdivision, elements=int(self.elements),
+        subdiv = 1 if self.patch_mode == "SIZE" else self.subdivision  # SIZE splits faces in the export
+        return SolveSettings(method=self.method, subdiv=subdiv, elements=int(self.elements),
                              hemicube_res=self.hemicube_resolution, solver=self.solver,
                              tolerance=self.tolerance or None)
 
