@@ -169,3 +169,15 @@ def test_exr_output_of_an_unsaved_file_is_refused_unchanged():
     support.select_only([quad])
     bpy.context.scene.radiosity.output = "EXR"
     refused("save the .blend first")
+
+
+def test_missing_opengl_is_one_line_and_leaves_the_file_unchanged(monkeypatch):
+    from radiosity_addon.blender import worker
+    from radiosity_addon.core.gl import GLUnavailable
+
+    def no_gl():
+        raise GLUnavailable("cannot create an OpenGL 4.3 context (simulated)")
+
+    monkeypatch.setattr(worker.gl, "create_context", no_gl)
+    support.open_blend(support.CORNELL)
+    refused("OpenGL 4.3")
