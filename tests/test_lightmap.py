@@ -13,7 +13,7 @@ import pytest
 
 from radiosity_addon import cli
 from radiosity_addon.core import gl
-from radiosity_addon.core.lightmap import (GUTTER, MIN_SIZE, bake_lightmaps, lattice_parameters,
+from radiosity_addon.core.lightmap import (GUTTER, MIN_SIZE, bake_lightmaps, gl_mip_count, lattice_parameters,
                                            resolve_size)
 from radiosity_addon.core.padding import dilate
 from radiosity_addon.core.patches import bilinear, subdivide
@@ -319,14 +319,17 @@ def test_every_mip_level_keeps_the_covered_mean(cornell, cornell_solution, corne
                 assert error.max() < 0.01, f"{label}: {name} level {k}: {covered_mean(level, coverage)} vs {base}"
                 _, ring = dilate(np.zeros(coverage.shape + (1,)), coverage > 0, GUTTER)
                 assert (level[..., 3][ring] > 0).all(), f"{label}: {name} level {k}: gutter not filled"
-                if k:
+                if 0 < k < gl_mip_count(lightmap.levels):  # sizes GL's generated mipmaps would have
                     h, w = box.shape[0] // 2, box.shape[1] // 2
                     box = box[:2 * h, :2 * w].reshape(h, 2, w, 2, 4).mean(axis=(1, 3))
                     box_error = np.abs(covered_mean(box, coverage) - base) / np.maximum(base, 1e-3 * base.max())
                     box_filter_errors.append(box_error.max())
     assert max(box_filter_errors) > 0.01
     for lightmap in power_of_two.values():
-        assert min(lightmap.levels[-1].shape[:2]) == 1  # powers of two halve down to a single row
+        assert lightmap.levels[-1].shape[:2] == (1, 1)
+        assert gl_mip_count(lightmap.levels) == len(lightmap.levels)  # powers of two: GL's sizes all the way
+    for lightmap in cornell_bakes[0][2].values():
+        assert lightmap.levels[-1].shape[:2] == (1, 1) and gl_mip_count(lightmap.levels) >= 4
 
 
 # --- resolution --------------------------------------------------------------------------
@@ -344,8 +347,20 @@ def test_resolution_follows_density_override_cap_and_power_of_two(cornell, corne
     assert maps["floor"].size == (128, 128) and maps["light"].size == (32, 16)
     for name in ("back_wall", "tall_block"):  # at least the density asked for; rounding sizes up adds some
         assert 0.98 * 64 < maps[name].texel_density < 1.25 * 64
-    with pytest.raises(SolveError, match="not an object"):
+    with pytest.raises(SolveError, match="no object 'nope'"):
         bake_lightmaps(cornell, cornell_solution, resolution_overrides={"nope": 64}, ctx=gl_ctx)
+    with pytest.raises(SolveError, match="do not fit"):  # five charts with their margins need more than 8 x 8
+        bake_lightmaps(cornell, cornell_solution, resolution_overrides={"tall_block": 8}, ctx=gl_ctx)
+
+
+def test_only_the_objects_asked_for_are_baked(cornell, cornell_solution, gl_ctx):
+    """Objects that only occlude (a Blender bake of selected objects) need no lightmap."""
+    maps = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, objects=["floor", "light"], ctx=gl_ctx)
+    assert sorted(maps) == ["floor", "light"]
+    everything = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, ctx=gl_ctx)
+    assert np.array_equal(maps["floor"].rgba, everything["floor"].rgba)
+    with pytest.raises(SolveError, match="no object 'nope'"):
+        bake_lightmaps(cornell, cornell_solution, objects=["floor", "nope"], ctx=gl_ctx)
 
 
 def test_given_uvs_are_used_and_mixed_uvs_refused(gl_ctx):

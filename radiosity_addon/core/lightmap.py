@@ -2,8 +2,8 @@
 
 Per object (DESIGN.md, Lightmaps):
 1. Resolution from a texel density (texels per scene unit), a per-object
-   override and a cap; sizes are multiples of 8 so the first mip levels halve
-   exactly (optionally powers of two, which halve all the way down).
+   override and a cap; sizes are multiples of 8 so at least the first three
+   mip levels have OpenGL's sizes too (powers of two, optionally: all do).
 2. UVs: the scene's `uv` (the Blender exporter's `Lightmap` map) or, when an
    object has none, an automatic layout (`uv_layout`).
 3. Values: every patch carries a lattice of its element centres plus border
@@ -51,7 +51,7 @@ SMOOTH_EDGE_DEGREES = 30.0  # faces meeting flatter than this share values at th
 @dataclass
 class Lightmap:
     object_name: str
-    levels: list[np.ndarray]  # mip chain, (h_k, w_k, 4) float32; levels[0] is the image
+    levels: list[np.ndarray]  # mip chain down to 1 x 1, (h_k, w_k, 4) float32; levels[0] is the image
     coverage: list[np.ndarray]  # per level, (h_k, w_k) float32: fraction of the texel on charts (alpha adds gutters)
     patch_index: np.ndarray  # (H, W) int32: patch whose footprint holds the texel centre, -1 if none
     surface_uv: dict[int, np.ndarray]  # surface index -> (k, 2) vertex UVs the map was baked with
@@ -248,35 +248,56 @@ def _rasterize(ctx, corners_texels: np.ndarray, lattice: np.ndarray, size: tuple
     return values.reshape(height, width, 4)[..., :3], ids.reshape(height, width)
 
 
-def mip_chain(values: np.ndarray, coverage: np.ndarray, gutter: int) -> tuple[list, list]:
-    """RGBA float32 levels and their chart coverage: each level is the coverage-weighted 2x2 mean
-    of the previous level's chart texels (not its gutter), so every level's coverage-weighted
-    mean is level 0's; then it is dilated by `gutter` texels. The chain ends at the first odd
-    size (GL halves sizes by floor(w / 2), this by 2 x 2 blocks: they agree while sizes are even)."""
+def mip_levels(values: np.ndarray, coverage: np.ndarray, gutter: int) -> tuple[list, list]:
+    """RGBA float32 levels down to 1 x 1, and each level's chart coverage (the fraction of the
+    texel on charts). Each level is the coverage-weighted 2x2 mean of the previous level's chart
+    texels (not its gutter), so every level's coverage-weighted mean is level 0's; then it is
+    dilated by `gutter` texels. Odd sizes halve rounding up (padded with uncovered texels);
+    OpenGL's mip sizes, floor(w / 2), agree while sizes stay even (see `gl_mip_count`)."""
+    coverage = np.asarray(coverage, dtype=np.float64)
     levels, coverages = [], []
     while True:
         filled, reached = dilate(values, coverage > 0, gutter)
         levels.append(np.concatenate([filled, reached[..., None]], axis=2).astype(np.float32))
         coverages.append(coverage.astype(np.float32))
-        h, w = coverage.shape
-        if max(h, w) == 1 or (h > 1 and h % 2) or (w > 1 and w % 2):
+        if coverage.shape == (1, 1):
             return levels, coverages
         values, coverage = downsample_weighted(values, coverage)  # a 1-texel axis stays 1
 
 
+def mip_chain(values: np.ndarray, covered: np.ndarray, gutter: int) -> list[np.ndarray]:
+    """The RGBA levels of `mip_levels` (covered: bool mask or coverage fractions)."""
+    return mip_levels(values, covered, gutter)[0]
+
+
+def gl_mip_count(levels: list[np.ndarray]) -> int:
+    """How many leading levels have OpenGL's sizes (max(1, floor(w / 2^k)), same for h)."""
+    height, width = levels[0].shape[:2]
+    count = 0
+    for k, level in enumerate(levels):
+        if level.shape[:2] != (max(1, height >> k), max(1, width >> k)):
+            break
+        count += 1
+    return count
+
+
 def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXEL_DENSITY,
                    resolution_overrides: dict | None = None, max_size: int = MAX_SIZE,
-                   power_of_two: bool = False, ctx=None, gutter: int = GUTTER) -> dict[str, Lightmap]:
-    """One `Lightmap` per object of `scene`, keyed by object name (see the module doc)."""
+                   power_of_two: bool = False, ctx=None, gutter: int = GUTTER,
+                   objects=None) -> dict[str, Lightmap]:
+    """One `Lightmap` per object of `scene` (or of `objects`, names of some of them: objects
+    that only occlude need none), keyed by object name (see the module doc)."""
     if not texel_density > 0:
         raise SolveError(f"texel density must be positive, got {texel_density}")
     if max_size < MIN_SIZE:
         raise SolveError(f"the lightmap size cap must be at least {MIN_SIZE}, got {max_size}")
-    objects = _object_surfaces(scene)
+    all_objects = _object_surfaces(scene)
     overrides = dict(resolution_overrides or {})
-    unknown = sorted(set(overrides) - set(objects))
+    unknown = sorted((set(overrides) | set(objects or ())) - set(all_objects))
     if unknown:
-        raise SolveError(f"resolution override for '{unknown[0]}', which is not an object of the scene")
+        raise SolveError(f"no object '{unknown[0]}' in the scene to bake a lightmap for")
+    chosen = set(all_objects if objects is None else objects)
+    objects = {name: indices for name, indices in all_objects.items() if name in chosen}
     patches = solution.patches
     values = element_values(solution)
     if len(values) != len(patches):
@@ -285,7 +306,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
     pad = gutter + 1  # a chart's grazed texels, then its gutter
 
     layouts = {}
-    object_of_surface = np.empty(len(scene.surfaces), dtype=np.int64)
+    object_of_surface = np.full(len(scene.surfaces), -1, dtype=np.int64)  # -1: not baked
     laid_out = np.zeros(len(scene.surfaces), dtype=bool)  # surfaces given automatic UVs here
     uv_maps = np.zeros((len(scene.surfaces), 2, 4))  # their affine maps: uv = M @ [x, y, z, 1]
     for number, (name, indices) in enumerate(objects.items()):
@@ -311,8 +332,11 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
     maps = uv_maps[patches.surface[auto]]
     patch_uv[auto] = np.einsum("pij,pkj->pki", maps[..., :3], patches.corners[auto]) + maps[:, None, :, 3]
 
-    lattice = continuous_lattice(patches.corners, patch_uv, values, object_of_surface[patches.surface],
-                                 patches.normal, world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
+    group = object_of_surface[patches.surface]
+    baked = np.flatnonzero(group >= 0)
+    lattice = np.zeros((len(patches),) + (values.shape[1] + 2,) * 2 + (3,))
+    lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
+                                        patches.normal[baked], world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
     lightmaps = {}
     with gl.gl_context(ctx) as gl_ctx:
         for name, indices in objects.items():
@@ -331,7 +355,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, texel_density: float = TEXE
             else:
                 surface_uv = {i: layout.surface_uv(i, scene.surfaces[i].vertices) for i in indices}
             area = sum(scene.surfaces[i].area for i in indices)
-            levels, coverage = mip_chain(texel_values.astype(np.float64), covered.astype(np.float64), gutter)
+            levels, coverage = mip_levels(texel_values.astype(np.float64), covered, gutter)
             lightmaps[name] = Lightmap(
                 object_name=name,
                 levels=levels,

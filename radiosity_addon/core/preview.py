@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from . import gl
+from .lightmap import gl_mip_count
 from .scene import Scene, SceneError
 
 EXPOSURE_PERCENTILE = 99.9
@@ -110,11 +111,14 @@ def _surface_triangles(scene: Scene, lightmaps: dict) -> dict[str, np.ndarray]:
 
 
 def _lightmap_texture(ctx, lightmap):
+    """The lightmap with our coverage-aware levels, as far as their sizes are OpenGL's (GL stops
+    sampling at MAX_LEVEL; sizes that are multiples of 8 give at least 4 levels)."""
     width, height = lightmap.size
-    texture = ctx.texture((width, height), 4, lightmap.levels[0].tobytes(), dtype="f4")
-    texture.build_mipmaps(base=0, max_level=len(lightmap.levels) - 1)  # allocates the levels
-    for level, image in enumerate(lightmap.levels[1:], start=1):
-        texture.write(np.ascontiguousarray(image).tobytes(), level=level)  # ours, coverage-aware
+    levels = lightmap.levels[:gl_mip_count(lightmap.levels)]
+    texture = ctx.texture((width, height), 4, levels[0].tobytes(), dtype="f4")
+    texture.build_mipmaps(base=0, max_level=len(levels) - 1)  # allocates the levels
+    for level, image in enumerate(levels[1:], start=1):
+        texture.write(np.ascontiguousarray(image).tobytes(), level=level)
     texture.filter = (ctx.LINEAR_MIPMAP_LINEAR, ctx.LINEAR)
     texture.repeat_x = texture.repeat_y = False  # clamp to edge
     return texture
