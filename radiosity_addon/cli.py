@@ -15,7 +15,7 @@ from pathlib import Path
 from .core.gl import GLUnavailable, gl_context
 from .core.lightmap import MAX_SIZE, TEXEL_DENSITY
 from .core.scene import SceneError
-from .core.solution import METHODS, SOLVERS, SolveCancelled, SolveError, SolveSettings
+from .core.solution import METHODS, SOLVERS, VISIBILITY_VARIANTS, SolveCancelled, SolveError, SolveSettings
 
 USER_ERRORS = (SceneError, SolveError, GLUnavailable, SolveCancelled, FileNotFoundError)
 
@@ -45,8 +45,9 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--max-iterations", type=int, default=defaults.max_iterations,
                        help="iteration cap of the linear solvers")
     group.add_argument("--max-shots", type=int, default=None, help="shot budget of the progressive method")
-    group.add_argument("--visibility", choices=("plain", "tessellated", "search"), default=defaults.visibility,
-                       help="progressive visibility variant (default search)")
+    group.add_argument("--visibility", choices=VISIBILITY_VARIANTS, default=defaults.visibility,
+                       help="progressive visibility variant: plain projection, tessellated, tessellated with"
+                            " neighbour search (default), or search guarded against peeking past occluders")
     group.add_argument("--visibility-res", type=int, default=defaults.visibility_res, metavar="R",
                        help=f"pixels across the progressive visibility map (default {defaults.visibility_res})")
     group.add_argument("--shoot-from", choices=("centroid", "centre"), default=defaults.shoot_from,
@@ -55,6 +56,8 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--kernel", choices=("exact", "disk"), default=defaults.kernel,
                        help="progressive form-factor kernel: exact point-to-polygon (default) or the disk"
                             " approximation")
+    group.add_argument("--no-skips", dest="skip_unneeded", action="store_false",
+                       help="simulate every effect even when the scene analysis shows it is absent")
 
 
 def settings_from_args(args) -> SolveSettings:
@@ -62,7 +65,7 @@ def settings_from_args(args) -> SolveSettings:
         method=args.method, subdiv=args.subdiv, elements=args.elements, hemicube_res=args.hemicube_res,
         solver=args.solver, tolerance=args.tolerance, max_iterations=args.max_iterations,
         max_shots=args.max_shots, visibility=args.visibility, kernel=args.kernel,
-        visibility_res=args.visibility_res, shoot_from=args.shoot_from,
+        visibility_res=args.visibility_res, shoot_from=args.shoot_from, skip_unneeded=args.skip_unneeded,
     )
 
 

@@ -25,6 +25,7 @@ uniform float far;
 uniform int skip_patch;   // the shooter itself is not drawn (-1: draw all)
 
 flat out uint item;
+out float distance;   // from the eye, for the lookup's occluder test
 out float gl_ClipDistance[1];
 
 vec3 corner(float s, float t) {
@@ -35,7 +36,7 @@ vec3 corner(float s, float t) {
 void emit(vec3 position, uint id) {
     vec3 d = position - eye;
     vec3 q = vec3(dot(d, axis_x), dot(d, axis_y), dot(d, axis_z));
-    float distance = max(length(q), 1e-20);
+    distance = max(length(q), 1e-20);
     gl_Position = vec4(q.xy / distance, 2.0 * (distance - near) / (far - near) - 1.0, 1.0);
     gl_ClipDistance[0] = q.z;  // the front hemisphere only
     item = id;

@@ -5,26 +5,29 @@
 // continue) and its residual (unpadded tile, weighted by element area so that
 // mip means are power per patch area). The shooter's own residual is cleared.
 // V is looked up in the shooter's hemispherical item buffer: the receiver
-// looks for its own patch id at its projected position, within SEARCH_RADIUS
-// texels (dissertation Algorithm 8; 0 = the texel itself).
+// looks for its own patch id (or any patch of its own planar surface) at its
+// projected position, within SEARCH_RADIUS texels (dissertation Algorithm 8;
+// 0 = the texel itself).
 // F is the exact unoccluded point-to-polygon form factor (Lambert's contour
 // integral over the shooter polygon clipped to the receiver's hemisphere) when
 // KERNEL_EXACT is 1, else the disk approximation A cos cos / (pi r^2 + A).
 // Each work group also sums the shot's hit fraction and reflected fractions
 // (per channel) of the shooter's power, added in fixed point to `energy`.
 //
-// Defines: ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, RECORD_VISIBILITY.
+// Defines: ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN, RECORD_VISIBILITY.
 layout(local_size_x = 64) in;
 
 layout(rgba32f, binding = 0) uniform image2D radiosity;
 layout(rgba32f, binding = 1) uniform image2D residual;
 uniform usampler2D item_buffer;
+uniform sampler2D distance_map;     // distance from the eye of what each item texel shows (0: nothing)
 
 layout(std430, binding = 0) readonly buffer Corners { vec4 corner[]; };        // 4 per patch
 layout(std430, binding = 1) readonly buffer Patch { vec4 normal_area[]; };     // normal, area
 layout(std430, binding = 2) readonly buffer Reflectance { vec4 reflectance[]; };
 layout(std430, binding = 3) readonly buffer ElementWeight { float element_weight[]; };  // a_e S^2 / A
 layout(std430, binding = 4) buffer Energy { uint energy[4]; };
+layout(std430, binding = 7) readonly buffer Plane { int plane_of[]; };  // patches of one planar surface share it
 #if RECORD_VISIBILITY
 layout(std430, binding = 5) writeonly buffer Visibility { float visibility_out[]; };
 #endif
@@ -57,14 +60,29 @@ float visibility(vec3 x, vec3 n, int p) {
     if (q.z <= 0.0) {
         return 0.0;  // behind the shooter
     }
-    vec2 uv = q.xy / length(q) * 0.5 + 0.5;
-    ivec2 texel = ivec2(floor(uv * float(item_resolution)));
-    uint wanted = uint(p) + 1u;
+    float r = length(q);
+    vec2 uv = q.xy / r * 0.5 + 0.5;
+    ivec2 texel = clamp(ivec2(floor(uv * float(item_resolution))), ivec2(0), ivec2(item_resolution - 1));
+    // A planar surface cannot hide its own points, so any patch of the receiver's plane
+    // seen there counts (patch borders inside a surface are then no obstacle).
+    int plane = plane_of[p];
+    uint centre = texelFetch(item_buffer, texel, 0).r;
+    if (centre != 0u && plane_of[int(centre) - 1] == plane) {
+        return 1.0;
+    }
+    // Optionally (OCCLUDER_MARGIN >= 0) the search is for rasterization gaps only, not
+    // for peeking past occluders: when the own texel shows something clearly nearer,
+    // the receiver is hidden.
+    float seen = texelFetch(distance_map, texel, 0).r;
+    if (OCCLUDER_MARGIN >= 0.0 && seen > 0.0 && seen < r * (1.0 - OCCLUDER_MARGIN)) {
+        return 0.0;
+    }
     bool found = false;
     for (int dy = -SEARCH_RADIUS; dy <= SEARCH_RADIUS; ++dy) {
         for (int dx = -SEARCH_RADIUS; dx <= SEARCH_RADIUS; ++dx) {
             ivec2 at = clamp(texel + ivec2(dx, dy), ivec2(0), ivec2(item_resolution - 1));
-            found = found || texelFetch(item_buffer, at, 0).r == wanted;
+            uint item = texelFetch(item_buffer, at, 0).r;
+            found = found || (item != 0u && plane_of[int(item) - 1] == plane);
         }
     }
     return found ? 1.0 : 0.0;
@@ -118,7 +136,8 @@ float disk_form_factor(vec3 x, vec3 n) {
 
 void main() {
     const int per_patch = ELEMENTS * ELEMENTS;
-    int e = int(gl_GlobalInvocationID.x);
+    // rows of work groups beyond 65535 (the portable limit per dimension) go to y
+    int e = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
     bool in_range = e < patch_count * per_patch;
     int element = min(e, patch_count * per_patch - 1);
     int p = element / per_patch;

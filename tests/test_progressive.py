@@ -13,7 +13,7 @@ from radiosity_addon.core import gl
 from radiosity_addon.core.element_textures import ElementLayout, ElementTextures, element_areas, element_centers
 from radiosity_addon.core.padding import pad_tiles
 from radiosity_addon.core.patches import subdivide
-from radiosity_addon.core.raycast import point_polygon_form_factor
+from radiosity_addon.core.form_factor_kernels import point_to_clipped_polygon as point_polygon_form_factor
 from radiosity_addon.core.scene import load_scene, polygon_normal, scene_from_dict
 from radiosity_addon.core.shooting import Gatherer, PatchBuffers, Selector, patch_shooter
 from radiosity_addon.core.solution import SolveSettings
@@ -217,7 +217,10 @@ def test_unshot_power_decreases_monotonically_and_progress_is_physical(lit_cube)
     assert unshot[0] == pytest.approx(1.0, rel=1e-6) and unshot[-1] <= 1e-3
     assert np.all(np.diff(unshot) <= 1e-7)
     assert np.all(np.diff(fractions) >= -1e-7) and fractions[-1] == pytest.approx(1 - unshot[-1])
-    assert all({"shots", "elapsed", "eta"} <= set(details) for _, details in calls)
+    assert all({"shots", "elapsed", "eta", "ambient"} <= set(details) for _, details in calls)
+    # the preview's ambient term (ρ̄ = 0.9 everywhere) is R · unshot power / total area
+    first = calls[0][1]
+    assert first["ambient"] == pytest.approx([1.0 / 6.0 / 0.1] * 3, rel=1e-5)
 
 
 def test_energy_balance_of_closed_scene_within_half_percent(lit_cube):
@@ -236,6 +239,9 @@ def test_energy_balance_of_closed_scene_within_half_percent(lit_cube):
     assert energy["emitted"] == pytest.approx(emitted, rel=1e-12)
     assert abs(absorbed + energy["unshot_gpu_sum"] - emitted) < 0.005 * emitted
     assert energy["escaped"] < 0.005 * emitted  # closed: nothing should leave
+    assert energy["surplus"] < 0.005 * emitted
+    booked = energy["absorbed"] + energy["escaped"] + energy["unshot"] - energy["surplus"]
+    assert booked == pytest.approx(emitted, rel=1e-9)
     assert energy["absorbed"] == pytest.approx(absorbed, rel=1e-3)
     assert energy["unshot"] == pytest.approx(energy["unshot_gpu_sum"], rel=1e-3, abs=1e-6 * emitted)
 
@@ -251,6 +257,8 @@ def test_visibility_search_misclassifies_fewer_elements_than_plain(ctx):
     search = measure(ctx, scene, patches, 2, 512, "search", shooters)
     assert search["misclassified"] < tessellated["misclassified"] < plain["misclassified"]
     assert search["misclassified_non_grazing"] < 0.03
+    guarded = measure(ctx, scene, patches, 2, 512, "guarded", shooters)
+    assert guarded["false_visible"] < search["false_visible"]  # fewer leaks past occluders
 
 
 def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(ctx):
@@ -283,3 +291,23 @@ def test_cancel_and_shot_budget(ctx):
     solution = solve(scene, SolveSettings(subdiv=1, elements=1, max_shots=2, tolerance=1e-6), ctx=ctx)
     assert solution.report["shots"] == 2 and solution.report["stop_reason"] == "max_shots"
     assert solution.report["unshot_fraction"] > 1e-6
+
+
+def test_cli_progressive_writes_elements_and_report(tmp_path):
+    import json
+
+    from radiosity_addon.cli import main
+
+    out, report = tmp_path / "out.npz", tmp_path / "report.json"
+    status = main(["solve", "cornell-box", "--subdiv", "2", "--elements", "2", "--tolerance", "0.05",
+                   "--visibility", "tessellated", "--kernel", "disk", "--output", str(out), "--report", str(report),
+                   "--quiet"])
+    assert status == 0
+    arrays = np.load(out)
+    assert arrays["element_radiosity"].shape == (len(arrays["patch_area"]), 2, 2, 3)
+    data = json.loads(report.read_text())
+    assert data["method"] == "progressive" and data["kernel"] == "disk"
+    assert data["visibility"]["variant"] == "tessellated"
+    assert data["unshot_fraction"] <= 0.05 and data["shots"] > 0
+    assert {"emitted", "absorbed", "escaped", "unshot"} <= set(data["energy"])
+    assert {"select", "visibility", "shoot", "mipmap"} <= set(data["timings"])

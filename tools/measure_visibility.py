@@ -39,7 +39,8 @@ def measure(ctx, scene, patches, elements: int, resolution: int, variant: str, s
     textures = ElementTextures(ctx, patches, elements)
     buffers = PatchBuffers(ctx, patches, textures)
     visibility_map = VisibilityMap(ctx, patches, resolution, variant, scene.diameter)
-    gatherer = Gatherer(ctx, textures, buffers, "exact", radius, record_visibility=True)
+    gatherer = Gatherer(ctx, textures, buffers, "exact", radius, record_visibility=True,
+                        occluder_margin=VARIANTS[variant].occluder_margin)
     wrong = total = false_visible = false_hidden = 0
     wrong_steep = total_steep = 0
     weight_wrong = weight_visible = 0.0

@@ -21,13 +21,19 @@ import numpy as np
 from .element_textures import ElementTextures
 from .patches import Patches
 from .scene import Scene
-from .shooting import READBACK, Gatherer, PatchBuffers, Selector, patch_shooter
+from .shooting import READBACK, Gatherer, PatchBuffers, PatchShooters, Selector
 from .solution import SolveCancelled, SolveSettings, StageTimer
 from .visibility import VARIANTS, VisibilityMap
 
 
 class EnergyLedger:
-    """Power accounts in float64 (RGB): emitted = absorbed + escaped + unshot."""
+    """Power accounts in float64 (RGB): emitted + surplus = absorbed + escaped + unshot.
+
+    A shot's hit fraction is the shooter's form-factor row sum over all elements. In a closed
+    scene it should be 1; point-sampled factors make it a little more (near corners) or less
+    (along shared edges). The shortfall is booked as escaped, the excess as `surplus`
+    (energy the discretization created), so the accounts balance exactly either way.
+    """
 
     def __init__(self, emitted: np.ndarray):
         self.emitted = np.asarray(emitted, dtype=np.float64)
@@ -35,6 +41,7 @@ class EnergyLedger:
         self.absorbed = np.zeros(3)
         self.reflected = np.zeros(3)
         self.escaped = np.zeros(3)
+        self.surplus = np.zeros(3)
         self.pending = None  # power of the shot whose fractions are not yet read back
 
     def settle(self, fractions: np.ndarray) -> None:
@@ -42,12 +49,13 @@ class EnergyLedger:
         if self.pending is None:
             return
         power, self.pending = self.pending, None
-        hit = min(float(fractions[0]), 1.0)
+        hit = float(fractions[0])
         reflected = np.minimum(fractions[1:4], hit)
         self.shot += power
         self.reflected += reflected * power
         self.absorbed += (hit - reflected) * power
-        self.escaped += (1.0 - hit) * power
+        self.escaped += max(1.0 - hit, 0.0) * power
+        self.surplus += max(hit - 1.0, 0.0) * power
 
     @property
     def unshot(self) -> np.ndarray:
@@ -57,18 +65,21 @@ class EnergyLedger:
         total = lambda v: float(np.sum(v))  # noqa: E731
         return {
             "emitted": total(self.emitted), "absorbed": total(self.absorbed), "escaped": total(self.escaped),
+            "surplus": total(self.surplus),
             "unshot": total(self.unshot), "shot": total(self.shot), "reflected": total(self.reflected),
             "rgb": {k: v.tolist() for k, v in (("emitted", self.emitted), ("absorbed", self.absorbed),
                                                  ("escaped", self.escaped), ("unshot", self.unshot))},
         }
 
 
-def ambient_term(patches: Patches, unshot_power: np.ndarray) -> np.ndarray:
-    """Cohen et al. 1988: Ambient = R Σ A ΔB / Σ A, R = 1/(1 − ρ̄). For previews only:
-    a preview shows B + ρ · Ambient; the result never includes it."""
+def ambient_term(patches: Patches):
+    """Cohen et al. 1988: Ambient = R Σ A ΔB / Σ A, R = 1/(1 − ρ̄), as a function of the unshot
+    power Σ A ΔB (RGB). For previews only: a preview shows B + ρ · Ambient; the result never
+    includes it."""
     area = patches.area
     mean_reflectance = (area[:, None] * patches.reflectance).sum(axis=0) / area.sum()
-    return np.asarray(unshot_power) / area.sum() / np.maximum(1.0 - mean_reflectance, 1e-6)
+    scale = 1.0 / (area.sum() * np.maximum(1.0 - mean_reflectance, 1e-6))
+    return lambda unshot_power: np.asarray(unshot_power) * scale
 
 
 def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettings, timer: StageTimer,
@@ -83,6 +94,8 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
     emitted = (patches.area[:, None] * patches.emission).sum(axis=0)
     ledger = EnergyLedger(emitted)
     emitted_total = float(emitted.sum())
+    ambient = ambient_term(patches)
+    shooters = PatchShooters(patches)
     objects = []
     try:
         with timer.stage("setup"):
@@ -94,7 +107,8 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
             objects.append(selector)
             visibility_map = VisibilityMap(ctx, patches, resolution, variant, scene.diameter)
             objects.append(visibility_map)
-            gatherer = Gatherer(ctx, textures, buffers, settings.kernel, VARIANTS[variant].search_radius)
+            gatherer = Gatherer(ctx, textures, buffers, settings.kernel, VARIANTS[variant].search_radius,
+                                occluder_margin=VARIANTS[variant].occluder_margin)
             objects.append(gatherer)
 
         shots = 0
@@ -117,14 +131,14 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
                          f"shot {shots}, unshot {fraction_left:.2e} of emitted"
                          + (f", ~{eta:.0f} s left" if eta is not None else ""),
                          {"shots": shots, "elapsed": elapsed, "eta": eta, "unshot_fraction": fraction_left,
-                          "ambient": ambient_term(patches, unshot_gpu).tolist()})
+                          "ambient": ambient(unshot_gpu).tolist()})
             if fraction_left <= tolerance or selection.patch < 0:
                 break
             if shots >= max_shots:
                 stop_reason = "max_shots"
                 break
-            shooter = patch_shooter(patches, selection.patch, selection.residual,
-                                    selection.centroid if settings.shoot_from == "centroid" else None)
+            shooter = shooters.shooter(selection.patch, selection.residual,
+                                       selection.centroid if settings.shoot_from == "centroid" else None)
             ledger.pending = shooter.power
             with timer.stage("visibility"):
                 visibility_map.render(shooter.position, shooter.axes, skip_patch=shooter.patch)
@@ -151,10 +165,13 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
         "readback_per_shot": READBACK,
         "visibility": {"variant": variant, "resolution": resolution,
                        "tessellation": VARIANTS[variant].tessellation,
-                       "search_radius": VARIANTS[variant].search_radius, "from": settings.shoot_from},
+                       "search_radius": VARIANTS[variant].search_radius,
+                       "occluder_margin": VARIANTS[variant].occluder_margin, "from": settings.shoot_from},
         "kernel": settings.kernel,
         "elements_per_patch": settings.elements,
         "shots_per_second": shots / solve_seconds if solve_seconds > 0 else None,
+        # what was actually run (the report's effects; progressive applies no scene-analysis skips yet)
+        "work": {"visibility_maps": shots, "channels_solved": 3, "occlusion_tested": True},
     }
     return patch_radiosity, elements, details
 

@@ -1,11 +1,6 @@
-"""CPU references for the progressive method's GPU passes (numpy, float64).
-
-- `visible_from`: ray-cast visibility from a point to many points against all
-  patch triangles (Möller–Trumbore), the independent check of the
-  hemispherical item buffer.
-- `point_polygon_form_factor`: Lambert's contour integral from points with
-  normals to a convex polygon clipped to each point's front half-space, the
-  reference of the GPU's exact kernel.
+"""CPU ray-cast visibility (numpy, float64): the independent check of the
+progressive method's hemispherical item buffers. `visible_from` tests segments
+from a point to many points against all patch triangles (Möller–Trumbore).
 """
 
 from __future__ import annotations
@@ -41,34 +36,3 @@ def visible_from(eye: np.ndarray, points: np.ndarray, patches: Patches, ignore: 
         hit &= owner[None] != ignore[start:start + chunk, None]
         out[start:start + chunk] = ~hit.any(axis=1)
     return out
-
-
-def point_polygon_form_factor(points: np.ndarray, normals: np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """(N,) differential-area-to-polygon form factors from points (N, 3) with unit normals (N, 3)
-    to a planar convex polygon (K, 3) whose front faces the points. Parts of the polygon behind
-    a point's tangent plane are clipped away."""
-    points, normals = np.atleast_2d(points), np.atleast_2d(normals)
-    result = np.zeros(len(points))
-    for n_index in range(len(points)):
-        x, n = points[n_index], normals[n_index]
-        rel = polygon - x
-        heights = rel @ n
-        clipped = []
-        for k in range(len(rel)):
-            a, b, da, db = rel[k], rel[(k + 1) % len(rel)], heights[k], heights[(k + 1) % len(rel)]
-            if da >= 0:
-                clipped.append(a)
-            if (da >= 0) != (db >= 0):
-                clipped.append(a + (b - a) * da / (da - db))
-        total = 0.0
-        for k in range(len(clipped)):
-            a, b = clipped[k], clipped[(k + 1) % len(clipped)]
-            la, lb = np.linalg.norm(a), np.linalg.norm(b)
-            if la < 1e-300 or lb < 1e-300:
-                continue
-            c = np.cross(a / la, b / lb)
-            lc = np.linalg.norm(c)
-            if lc > 1e-15:
-                total += np.arctan2(lc, np.dot(a, b) / (la * lb)) * np.dot(n, c) / lc
-        result[n_index] = max(-total, 0.0) / (2 * np.pi)
-    return result

@@ -23,7 +23,7 @@ from .visibility import VisibilityMap, frame_from_normal
 READBACK = ("64 bytes per shot: best patch power and index, its unshot power centroid (s, t), its mean residual"
             " (RGB), total unshot power (RGB),"
             " and the previous shot's hit and reflected fractions (fixed point sums)")
-ENERGY_BINDING = 4
+MAX_GROUPS = 65535  # work groups per dispatch dimension guaranteed by OpenGL
 
 
 @dataclass
@@ -40,19 +40,32 @@ class Shooter:
         return self.area * self.radiosity
 
 
+class PatchShooters:
+    """Patches as shooters: their geometry computed once per solve, a `Shooter` per shot."""
+
+    def __init__(self, patches: Patches):
+        self.corners = patches.corners
+        self.normal = patches.normal
+        self.center = patches.center
+        self.area = patches.area
+
+    def shooter(self, index: int, radiosity: np.ndarray, eye_parameters=None) -> Shooter:
+        """Patch `index` shooting `radiosity`; its visibility map is rendered from its centre, or
+        from the bilinear point at `eye_parameters` (s, t) (the centroid of its unshot power)."""
+        normal = self.normal[index]
+        x, y = frame_from_normal(normal, self.corners[index, 1] - self.corners[index, 0])
+        if eye_parameters is None:
+            position = self.center[index]
+        else:
+            position = bilinear(self.corners[index:index + 1], np.float64(eye_parameters[0]),
+                                np.float64(eye_parameters[1]))[0]
+        return Shooter(position=position, axes=(x, y, normal), polygon=self.corners[index],
+                       area=float(self.area[index]), radiosity=np.asarray(radiosity, dtype=np.float64), patch=index)
+
+
 def patch_shooter(patches: Patches, index: int, radiosity: np.ndarray, eye_parameters=None) -> Shooter:
-    """Patch `index` shooting `radiosity`; its visibility map is rendered from its centre, or from
-    the bilinear point at `eye_parameters` (s, t) (the centroid of its unshot power)."""
-    normal = patches.normal[index]
-    edge = patches.corners[index, 1] - patches.corners[index, 0]
-    x, y = frame_from_normal(normal, edge)
-    if eye_parameters is None:
-        position = patches.center[index]
-    else:
-        position = bilinear(patches.corners[index:index + 1], np.float64(eye_parameters[0]),
-                            np.float64(eye_parameters[1]))[0]
-    return Shooter(position=position, axes=(x, y, normal), polygon=patches.corners[index],
-                   area=float(patches.area[index]), radiosity=np.asarray(radiosity, dtype=np.float64), patch=index)
+    """One-off `PatchShooters(patches).shooter(...)` (tests, tools)."""
+    return PatchShooters(patches).shooter(index, radiosity, eye_parameters)
 
 
 @dataclass
@@ -76,13 +89,16 @@ class PatchBuffers:
         self.weights = ctx.buffer(textures.weights.astype(np.float32).tobytes())
         self.energy = ctx.buffer(reserve=16)
         self.energy.clear()
+        # patches of one scene surface are coplanar: the visibility lookup accepts any of them
+        self.plane = ctx.buffer(patches.surface.astype(np.int32).tobytes())
 
     def bind(self) -> None:
         for binding, buffer in enumerate((self.corners, self.normal_area, self.reflectance, self.weights, self.energy)):
             buffer.bind_to_storage_buffer(binding)
+        self.plane.bind_to_storage_buffer(7)
 
     def release(self) -> None:
-        for buffer in (self.corners, self.normal_area, self.reflectance, self.weights, self.energy):
+        for buffer in (self.corners, self.normal_area, self.reflectance, self.weights, self.energy, self.plane):
             buffer.release()
 
 
@@ -121,7 +137,7 @@ class Gatherer:
     """The shooting pass over all receiving elements."""
 
     def __init__(self, ctx, textures: ElementTextures, buffers: PatchBuffers, kernel: str, search_radius: int,
-                 record_visibility: bool = False):
+                 record_visibility: bool = False, occluder_margin: float = -1.0):
         if kernel not in ("exact", "disk"):
             raise ValueError(f"unknown kernel '{kernel}' (choose exact, disk)")
         self.ctx, self.textures, self.buffers = ctx, textures, buffers
@@ -129,12 +145,15 @@ class Gatherer:
         self.program = gl.compute(ctx, "shoot_to_elements.comp", defines={
             "ELEMENTS": layout.elements, "GUTTER": layout.gutter, "KERNEL_EXACT": int(kernel == "exact"),
             "SEARCH_RADIUS": search_radius, "RECORD_VISIBILITY": int(record_visibility),
+            "OCCLUDER_MARGIN": float(occluder_margin),
         })
         self.element_count = layout.patch_count * layout.elements ** 2
         self.program["patch_count"] = layout.patch_count
         self.program["padded_tiles_per_row"] = layout.padded_tiles_per_row
         self.program["residual_tiles_per_row"] = layout.residual_tiles_per_row
         self.program["item_buffer"] = 0
+        if self.program.get("distance_map", None) is not None:
+            self.program["distance_map"] = 1
         self.visibility = ctx.buffer(reserve=4 * self.element_count) if record_visibility else None
 
     def shoot(self, shooter: Shooter, visibility_map: VisibilityMap) -> None:
@@ -157,10 +176,13 @@ class Gatherer:
         if self.visibility is not None:
             self.visibility.bind_to_storage_buffer(5)
         visibility_map.items.use(0)
+        visibility_map.distances.use(1)
         self.textures.radiosity.bind_to_image(0, read=True, write=True)
         self.textures.residual.bind_to_image(1, read=True, write=True, level=0)
         self.ctx.memory_barrier()
-        self.program.run(gl.groups(self.element_count, 64))
+        groups = gl.groups(self.element_count, 64)
+        rows = -(-groups // MAX_GROUPS)
+        self.program.run(-(-groups // rows), rows)
         self.ctx.memory_barrier()
 
     def recorded_visibility(self) -> np.ndarray:

@@ -12,6 +12,7 @@ from .patches import Patches
 
 METHODS = ("progressive", "hemicube")
 SOLVERS = ("jacobi-gpu", "jacobi-cpu", "gauss-seidel")
+VISIBILITY_VARIANTS = ("plain", "tessellated", "search", "guarded")  # progressive.visibility.VARIANTS
 DEFAULT_TOLERANCE = {"progressive": 1e-3, "hemicube": 1e-5}
 
 
@@ -33,11 +34,12 @@ class SolveSettings:
     tolerance: float | None = None  # None: the method's default
     max_iterations: int = 100_000  # linear solvers
     max_shots: int | None = None  # progressive; None: as many as the tolerance needs
-    visibility: str = "search"  # progressive: plain | tessellated | search
+    visibility: str = "search"  # progressive: plain | tessellated | search | guarded
     kernel: str = "exact"  # progressive: exact | disk
     visibility_res: int = 512  # progressive: pixels across the hemispherical visibility map
     shoot_from: str = "centroid"  # progressive: visibility map from the unshot power's centroid | centre
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
+    skip_unneeded: bool = True  # simulate only the effects the scene calls for (core/effects.py)
 
     @property
     def effective_tolerance(self) -> float:
@@ -54,8 +56,9 @@ class SolveSettings:
             raise SolveError("elements per patch must be a power of two (1, 2, 4, 8, ...)")
         if self.hemicube_res < 8 or self.hemicube_res % 2:
             raise SolveError("hemi-cube resolution must be an even number of at least 8")
-        if self.visibility not in ("plain", "tessellated", "search"):
-            raise SolveError(f"unknown visibility variant '{self.visibility}' (choose plain, tessellated, search)")
+        if self.visibility not in VISIBILITY_VARIANTS:
+            raise SolveError(f"unknown visibility variant '{self.visibility}'"
+                             f" (choose {', '.join(VISIBILITY_VARIANTS)})")
         if self.kernel not in ("exact", "disk"):
             raise SolveError(f"unknown kernel '{self.kernel}' (choose exact, disk)")
         if self.shoot_from not in ("centroid", "centre"):
