@@ -20,7 +20,6 @@ from .tags import LIGHTMAP_UV
 
 DEGENERATE_AREA_FRACTION = 1e-10
 MAX_SPLIT = 64  # pieces along one edge of a face in the Patch Size mode
-OCCLUDER_UV = {3: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], 4: [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]}
 
 
 @dataclass
@@ -175,17 +174,18 @@ class MeshExporter:
             slot_index = int(material_index[face_polygon[index]])
             material = slots[slot_index].material if slot_index < len(slots) else None
             reflectance, emission = self.materials.colours(material)
-            # occluders get no image: overlapping unit-square UVs spare the core an automatic layout
-            face_uv = uv[face] if uv is not None else np.array(OCCLUDER_UV[count])
+            face_uv = uv[face] if uv is not None else np.zeros((count, 2))  # occluders get no image
             for vertices, piece_uv in split_face(positions[loop_vertex[face]], face_uv, self.patch_size):
-                self.entries.append({
+                entry = {
                     "name": f"{obj.name}#{len(self.entries)}",
                     "object": obj.name,
                     "vertices": vertices.tolist(),
                     "reflectance": reflectance.tolist(),
                     "emission": emission.tolist(),
-                    "uv": piece_uv.tolist(),
-                })
+                }
+                if uv is not None:
+                    entry["uv"] = piece_uv.tolist()
+                self.entries.append(entry)
         return int(valid.sum())
 
 

@@ -20,9 +20,6 @@ from ..core.scene import Scene
 from ..core.solution import SolveCancelled, SolveError, SolveSettings
 
 
-OCCLUDER_LIGHTMAP_SIZE = 8  # core.lightmap.MIN_SIZE
-
-
 @dataclass
 class LightmapOptions:
     texel_density: float = 64.0  # texels per metre
@@ -56,11 +53,12 @@ def lightmap_images(scene: Scene, solution, objects: list[str], options: Lightma
         from ..core.lightmap import bake_lightmaps
     except ImportError:
         raise SolveError("the lightmap stage is not available in this build") from None
-    overrides = {name: size for name, size in options.resolution_overrides.items() if size > 0}
-    # objects that only occlude get no image: lay them out at the smallest size the core accepts
-    overrides.update({name: OCCLUDER_LIGHTMAP_SIZE for name in scene.objects if name not in objects})
+    overrides = {name: size for name, size in options.resolution_overrides.items()
+                 if size > 0 and name in objects}
+    # objects that only occlude get no image
     lightmaps = bake_lightmaps(scene, solution, texel_density=options.texel_density,
-                               resolution_overrides=overrides or None, max_size=options.max_size, ctx=ctx)
+                               resolution_overrides=overrides or None, max_size=options.max_size, ctx=ctx,
+                               objects=list(objects))
     images = {}
     for name in objects:
         if name not in lightmaps:
