@@ -232,3 +232,28 @@ def test_patch_size_mode_bakes_through_the_operator():
     assert bpy.ops.radiosity.bake() == {"FINISHED"}
     assert all(f"{obj.name}_lightmap" in bpy.data.images
                for obj in bpy.context.scene.objects if obj.type == "MESH")
+
+
+def test_mirrored_objects_keep_their_fronts_and_lamps_are_reported_as_ignored():
+    from radiosity_addon.blender.export import export_scene
+
+    context = support.open_blend(support.ROOM)
+    light = bpy.data.objects["Ceiling Light"]  # a quad facing down
+    mirrored = light.copy()
+    mirrored.scale = (-1.0, 1.0, 1.0)
+    context.scene.collection.objects.link(mirrored)
+    context.view_layer.update()
+    scene = export_scene(context.evaluated_depsgraph_get(), [], [light, mirrored]).scene
+    normals = {s.object_name: s.normal for s in scene.surfaces}
+    assert np.allclose(normals[light.name], [0, 0, -1]) and np.allclose(normals[mirrored.name], [0, 0, -1])
+
+    lamp = bpy.data.objects.new("Lamp", bpy.data.lights.new("Lamp", "POINT"))
+    context.scene.collection.objects.link(lamp)
+    support.select_only([bpy.data.objects["Room"]])
+    plan = prepare(context, context.scene.radiosity)
+    try:
+        assert any("lamp(s) ignored" in line for line in plan.warnings)
+    finally:
+        from radiosity_addon.blender.bake import rollback
+
+        rollback(plan)

@@ -75,8 +75,12 @@ def prepare(context, settings, objects=None, output_dir=None) -> BakePlan:
         raise
     worker = BakeWorker(exported.scene, solve_settings, exported.baked_objects,
                         settings.lightmap_options(baked))
+    warnings = list(exported.warnings)
+    lamps = [obj for obj in context.view_layer.objects if obj.type == "LIGHT" and obj.visible_get()]
+    if lamps:
+        warnings.append(f"{len(lamps)} lamp(s) ignored: the bake is lit by emissive materials only")
     return BakePlan(objects=baked, worker=worker, output=output, directory=directory,
-                    added_uv_meshes=added, warnings=exported.warnings)
+                    added_uv_meshes=added, warnings=warnings)
 
 
 def rollback(plan: BakePlan) -> None:
