@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.scene import PLANARITY_TOLERANCE, Scene, SceneError, scene_from_dict
+from ..core.scene import PLANARITY_TOLERANCE, Scene, SceneError, Surface, check_has_emitter
 from .errors import BakeError
 from .materials import MaterialReader
 from .tags import LIGHTMAP_UV
@@ -92,7 +92,7 @@ class MeshExporter:
         self.patch_size = patch_size
         self.materials = MaterialReader()
         self.warnings: list[str] = []
-        self.entries: list[dict] = []
+        self.surfaces: list[Surface] = []
 
     def add(self, obj, obj_eval, with_lightmap_uv: bool) -> int:
         """Append the faces of one evaluated object; returns how many surfaces it gave."""
@@ -176,16 +176,11 @@ class MeshExporter:
             reflectance, emission = self.materials.colours(material)
             face_uv = uv[face] if uv is not None else np.zeros((count, 2))  # occluders get no image
             for vertices, piece_uv in split_face(positions[loop_vertex[face]], face_uv, self.patch_size):
-                entry = {
-                    "name": f"{obj.name}#{len(self.entries)}",
-                    "object": obj.name,
-                    "vertices": vertices.tolist(),
-                    "reflectance": reflectance.tolist(),
-                    "emission": emission.tolist(),
-                }
-                if uv is not None:
-                    entry["uv"] = piece_uv.tolist()
-                self.entries.append(entry)
+                # built directly, not through scene_from_dict: the checks above (finite, non-degenerate,
+                # planar convex quads, reflectance < 1) are those it makes, vectorized per mesh
+                self.surfaces.append(Surface(name=f"{obj.name}#{len(self.surfaces)}", vertices=vertices,
+                                             reflectance=reflectance, emission=emission, object=obj.name,
+                                             uv=piece_uv if uv is not None else None))
         return int(valid.sum())
 
 
@@ -198,14 +193,13 @@ def export_scene(depsgraph, baked, occluders, patch_size: float = 0.0) -> Export
         exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=True)
     for obj in occluders:
         exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=False)
-    if not exporter.entries:
+    if not exporter.surfaces:
         raise BakeError("nothing to bake: the selected objects have no faces")
+    scene = Scene(surfaces=exporter.surfaces)
     try:
-        scene = scene_from_dict({"surfaces": exporter.entries}, require_emitter=True)
-    except SceneError as error:
-        if "nothing emits light" in str(error):
-            raise BakeError("nothing emits light: give a mesh an emissive material (Emission Strength > 0);"
-                            " lamps are not baked") from None
-        raise BakeError(str(error)) from None
+        check_has_emitter(scene)
+    except SceneError:
+        raise BakeError("nothing emits light: give a mesh an emissive material (Emission Strength > 0);"
+                        " lamps are not baked") from None
     return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked],
                          warnings=exporter.materials.warnings + exporter.warnings)

@@ -38,6 +38,9 @@ class MaterialReader:
             if np.any(reflectance > MAX_REFLECTANCE):
                 self.warn(material, f"reflectance capped at {MAX_REFLECTANCE} (light must lose energy at each bounce)")
                 reflectance = np.minimum(reflectance, MAX_REFLECTANCE)
+            if not (np.all(np.isfinite(reflectance)) and np.all(np.isfinite(emission))):
+                self.warn(material, "a colour or strength is not a finite number; baked as a grey default")
+                reflectance, emission = DEFAULT_REFLECTANCE, np.zeros(3)
             self.cache[key] = (np.clip(reflectance, 0.0, None), np.clip(emission, 0.0, None))
         return self.cache[key]
 
