@@ -114,9 +114,13 @@ def _own_materials(obj) -> list:
         obj.data.materials.append(None)
         obj[ADDED_SLOT] = True
     materials = []
+    copies = {}  # shared material -> this object's copy (two slots may show the same material)
     for slot in obj.material_slots:
         material = slot.material
-        if material is None:
+        if material is not None and material.name in copies:
+            slot.link = "OBJECT"
+            slot.material = material = copies[material.name]
+        elif material is None:
             _remember_slots(obj)
             material = bpy.data.materials.new(f"{obj.name} lightmap")
             material[COPY_OF] = ""
@@ -127,6 +131,7 @@ def _own_materials(obj) -> list:
             copy = material.copy()
             copy.name = f"{material.name} ({obj.name} lightmap)"
             copy[COPY_OF] = material.name
+            copies[material.name] = copy
             slot.link = "OBJECT"
             slot.material = copy
             material = copy
