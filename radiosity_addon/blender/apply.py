@@ -215,8 +215,8 @@ def remove_bake(obj) -> bool:
     if ORIGINAL_SLOTS in obj:
         had_bake = True
         originals = list(obj[ORIGINAL_SLOTS])
-        copies = [slot.material for slot in obj.material_slots
-                  if slot.material is not None and COPY_OF in slot.material]
+        copies = sorted({slot.material.name for slot in obj.material_slots
+                         if slot.material is not None and COPY_OF in slot.material})
         for slot, (link, name) in zip(obj.material_slots, originals):
             slot.link = "OBJECT"
             slot.material = None
@@ -225,8 +225,9 @@ def remove_bake(obj) -> bool:
                 slot.material = bpy.data.materials.get(name) if name else None
         if obj.get(ADDED_SLOT):
             obj.data.materials.pop(index=len(obj.data.materials) - 1)
-        for copy in copies:
-            if copy.users == 0:
+        for name in copies:
+            copy = bpy.data.materials.get(name)
+            if copy is not None and copy.users == 0:
                 bpy.data.materials.remove(copy)
         for key in (ORIGINAL_SLOTS, ADDED_SLOT):
             if key in obj:
