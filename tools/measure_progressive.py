@@ -48,7 +48,8 @@ def furnace(ctx, args):
             energy = solution.report["energy"]
             print(f"furnace kernel {kernel:5s} subdiv {subdiv} elements {args.elements} tol {args.tolerance:g}:"
                   f" mean B {mean:.4f} (error {mean / 10 - 1:+.2%}), elements {b.min():.3f}..{b.max():.3f},"
-                  f" escaped {energy['escaped'] / energy['emitted']:.2%} of emitted,"
+                  f" row-sum shortfall {energy['escaped'] / energy['emitted']:.2%} and surplus"
+                  f" {energy['surplus'] / energy['emitted']:.2%} of emitted,"
                   f" {solution.report['shots']} shots, {time.perf_counter() - started:.1f} s")
 
 
