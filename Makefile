@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.requirements-installed
 OUT ?= out
 
-.PHONY: setup check-system demo test bench bench-quick extension clean
+.PHONY: setup check-system demo test bench bench-quick extension samples bake-sample clean
 
 setup: check-system $(STAMP)
 
@@ -28,6 +28,20 @@ demo: setup
 
 test: setup
 	$(PY) -m pytest
+
+# dist/radiosity_baker-<version>-<platform>.zip for linux-x64, windows-x64, macos-arm64
+# (downloads the moderngl/glcontext wheels into wheels/, builds and validates with Blender's tool)
+extension: setup
+	$(PY) tools/build_extension.py --output-dir dist
+
+# the Cornell sample baked through the add-on: EXRs, a baked .blend and a preview render in out/
+bake-sample: setup
+	$(PY) -m radiosity_addon bake sample_blends/cornell_box.blend --output-dir $(OUT)/cornell-lightmaps \
+	  --save-as $(OUT)/cornell_box_baked.blend --preview $(OUT)/cornell_box_preview.png
+
+# sample_blends/*.blend from the bundled Cornell box and a hand-made room
+samples: setup
+	$(PY) tools/make_sample_blends.py
 
 clean:
 	rm -rf $(OUT) dist build .pytest_cache

@@ -20,6 +20,12 @@ from .core.solution import METHODS, SOLVERS, VISIBILITY_VARIANTS, SolveCancelled
 USER_ERRORS = (SceneError, SolveError, GLUnavailable, SolveCancelled, FileNotFoundError)
 
 
+def user_errors() -> tuple:
+    """USER_ERRORS plus the Blender side's BakeError once that side is loaded (it needs bpy)."""
+    blender_errors = sys.modules.get(f"{__package__}.blender.errors")
+    return USER_ERRORS + ((blender_errors.BakeError,) if blender_errors else ())
+
+
 def add_solver_options(parser: argparse.ArgumentParser) -> None:
     defaults = SolveSettings()
     group = parser.add_argument_group("solver")
@@ -155,6 +161,25 @@ def command_solve(args) -> int:
     return 0
 
 
+def command_bake(args) -> int:
+    try:
+        import bpy  # noqa: F401  (the Blender module; only this command needs it)
+    except ImportError:
+        raise SolveError("the bake command needs the Blender Python module: pip install bpy==5.0.1"
+                         " (Python 3.11), or run it inside Blender (see the README)") from None
+    from .blender.headless import bake_file
+
+    progress = print_progress(args.quiet)
+    summary = bake_file(args.file, settings_from_args(args), objects=args.objects, output_dir=args.output_dir,
+                        save_as=args.save_as, preview=args.preview, texel_density=args.texel_density,
+                        max_resolution=args.max_lightmap_size, preview_size=args.preview_size,
+                        patch_size=args.patch_size,
+                        progress=(lambda p: progress(p.fraction, p.message, {})) if progress else None)
+    PROGRESS.end()
+    print(summary)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m radiosity_addon",
                                      description="Radiosity Baker: diffuse GI by radiosity on the GPU.")
@@ -181,6 +206,27 @@ def build_parser() -> argparse.ArgumentParser:
     images.add_argument("--exposure", type=float, default=None,
                         help="preview exposure (default: lit surfaces just reach white, emitters clip)")
     solve_parser.set_defaults(handler=command_solve)
+
+    bake_parser = commands.add_parser("bake", help="bake the mesh objects of a .blend file (needs the bpy module)")
+    bake_parser.add_argument("file", metavar="FILE.blend")
+    bake_parser.add_argument("--objects", metavar="A,B", help="objects to bake (default: every visible mesh)")
+    bake_parser.add_argument("--output-dir", metavar="DIR", help="write DIR/<object>_lightmap.exr")
+    bake_parser.add_argument("--save-as", metavar="OUT.blend",
+                             help="save the file with the lightmaps applied (packed unless --output-dir)")
+    bake_parser.add_argument("--preview", metavar="OUT.png",
+                             help="render the baked file from its camera (Cycles, CPU, a few samples)")
+    bake_parser.add_argument("--patch-size", type=float, metavar="S",
+                             help="split faces into patches about S metres across, small faces staying whole"
+                                  " (instead of --subdiv's N x N for every face)")
+    bake_parser.add_argument("--preview-size", type=int, default=256, metavar="N",
+                             help="longer side of the preview in pixels, at most the file's render size"
+                                  " (default 256)")
+    bake_parser.add_argument("--texel-density", type=float, metavar="D",
+                             help="lightmap texels per metre (default: the file's setting, 64)")
+    bake_parser.add_argument("--max-lightmap-size", type=int, metavar="PX", help="largest lightmap side")
+    add_solver_options(bake_parser)
+    bake_parser.add_argument("--quiet", action="store_true", help="no progress line")
+    bake_parser.set_defaults(handler=command_bake)
     return parser
 
 
@@ -188,7 +234,9 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)
-    except USER_ERRORS as error:
+    except Exception as error:
+        if not isinstance(error, user_errors()):
+            raise
         PROGRESS.end()
         print(f"error: {error}", file=sys.stderr)
         return 2

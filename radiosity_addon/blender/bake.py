@@ -1,0 +1,136 @@
+"""The bake as a transaction: prepare (main thread) -> solve (worker) -> finish or roll back.
+
+`prepare` may add 'Lightmap' UV maps; `rollback` removes them, so a cancelled or
+failed bake leaves the .blend exactly as it was. `finish` writes the images and
+switches the shading only once the solve has succeeded.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..core.gl import GLUnavailable
+from ..core.scene import SceneError
+from ..core.solution import SolveCancelled, SolveError
+from . import apply
+from .errors import BakeError
+from .export import export_scene
+from .lightmap_uv import add_lightmap_uvs, remove_lightmap_uvs
+from .worker import BakeWorker
+
+# errors the user can cause: reported as their message, one line
+USER_ERRORS = (BakeError, SceneError, SolveError, GLUnavailable, FileNotFoundError)
+
+
+@dataclass
+class BakePlan:
+    objects: list  # bpy objects that get lightmaps
+    worker: BakeWorker
+    output: str  # 'PACK' or 'EXR'
+    directory: Path | None
+    added_uv_meshes: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
+    started: float = field(default_factory=time.monotonic)
+
+
+def choose_objects(context, objects=None) -> list:
+    """The mesh objects to bake: `objects` if given, else the selection. Refuses an unusable choice."""
+    chosen = list(objects) if objects is not None else list(context.selected_objects)
+    if not chosen:
+        raise BakeError("select the mesh objects to bake first")
+    meshes = [obj for obj in chosen if obj.type == "MESH"]
+    if not meshes:
+        kinds = ", ".join(sorted({obj.type.lower() for obj in chosen}))
+        raise BakeError(f"no mesh among the selected objects ({kinds}); select meshes to bake")
+    if context.mode != "OBJECT":
+        raise BakeError("switch to Object Mode to bake")
+    return meshes
+
+
+def prepare(context, settings, objects=None, output_dir=None) -> BakePlan:
+    """Check, export and hand the solve to a worker (not yet started)."""
+    baked = choose_objects(context, objects)
+    solve_settings = settings.solve_settings()
+    try:
+        solve_settings.validate()
+    except SolveError as error:
+        raise BakeError(str(error)) from None
+    output = "EXR" if output_dir is not None else settings.output
+    directory = Path(output_dir) if output_dir is not None else apply.default_exr_directory()
+    apply.check_output(output, directory)
+
+    occluders = []
+    if settings.include_unselected:
+        baked_names = {obj.name for obj in baked}
+        occluders = [obj for obj in context.view_layer.objects
+                     if obj.type == "MESH" and obj.name not in baked_names and obj.visible_get()]
+    added = add_lightmap_uvs(baked, settings.uv_margin)
+    try:
+        exported = export_scene(context.evaluated_depsgraph_get(), baked, occluders,
+                                patch_size=settings.patch_size if settings.patch_mode == "SIZE" else 0.0)
+    except BaseException:
+        remove_lightmap_uvs(added)
+        raise
+    worker = BakeWorker(exported.scene, solve_settings, exported.baked_objects,
+                        settings.lightmap_options(baked))
+    warnings = list(exported.warnings)
+    lamps = [obj for obj in context.view_layer.objects if obj.type == "LIGHT" and obj.visible_get()]
+    if lamps:
+        warnings.append(f"{len(lamps)} lamp(s) ignored: the bake is lit by emissive materials only")
+    return BakePlan(objects=baked, worker=worker, output=output, directory=directory,
+                    added_uv_meshes=added, warnings=warnings)
+
+
+def rollback(plan: BakePlan) -> None:
+    remove_lightmap_uvs(plan.added_uv_meshes)
+
+
+def finish(plan: BakePlan) -> str:
+    """Apply a finished worker's result, or roll back and raise its error. Returns a summary line."""
+    worker = plan.worker
+    if worker.error is not None or worker.result is None:
+        rollback(plan)
+        error = worker.error
+        if isinstance(error, SolveCancelled) or worker.cancelled:
+            raise SolveCancelled("bake cancelled; nothing was changed")
+        if isinstance(error, USER_ERRORS):
+            raise BakeError(str(error)) from None
+        raise error if error is not None else BakeError("the bake stopped without a result")
+    images, report = worker.result
+    try:
+        written = apply.write_images(images, plan.output, plan.directory)
+    except BaseException:
+        rollback(plan)
+        raise
+    try:
+        apply.show_lightmaps(plan.objects, written)
+    except BaseException:  # a bug: better unbaked and consistent than half wired
+        for obj in plan.objects:
+            apply.remove_bake(obj)
+        rollback(plan)
+        raise
+    seconds = time.monotonic() - plan.started
+    counts = report.get("counts", {})
+    return (f"baked {len(plan.objects)} object(s) in {seconds:.1f} s ({report.get('method')},"
+            f" {counts.get('patches', '?')} patches)")
+
+
+def bake_blocking(context, settings, objects=None, output_dir=None, should_cancel=None, on_progress=None):
+    """Scripts, background mode and the command line: the whole bake, waiting for the worker.
+    Returns (summary line, warnings)."""
+    plan = prepare(context, settings, objects, output_dir)
+    plan.worker.start()
+    try:
+        while not plan.worker.wait(0.1):
+            if should_cancel is not None and should_cancel():
+                plan.worker.cancel()
+            if on_progress is not None:
+                on_progress(plan.worker.snapshot())
+    except BaseException:  # Ctrl+C: stop the worker, then leave the file as it was
+        plan.worker.cancel()
+        plan.worker.wait()
+        rollback(plan)
+        raise
+    return finish(plan), plan.warnings

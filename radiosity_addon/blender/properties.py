@@ -1,0 +1,96 @@
+"""Bake settings stored in the .blend: `scene.radiosity` and `object.radiosity`."""
+
+from __future__ import annotations
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
+
+from ..core.solution import SolveSettings
+from .worker import LightmapOptions
+
+_DEFAULTS = SolveSettings()
+
+METHOD_ITEMS = [
+    ("progressive", "Progressive", "Progressive refinement on the GPU: shoots the brightest patch first"
+                                   " (fast, the default)"),
+    ("hemicube", "Hemi-cube", "The original method: hemi-cube form factors and a linear solve"
+                              " (memory grows with patches squared)"),
+]
+SOLVER_ITEMS = [
+    ("jacobi-gpu", "Jacobi (GPU)", "Jacobi iterations in a compute shader"),
+    ("jacobi-cpu", "Jacobi (CPU)", "Jacobi iterations with numpy"),
+    ("gauss-seidel", "Gauss-Seidel (CPU)", "Gauss-Seidel iterations with numpy: about half the sweeps of Jacobi"),
+]
+ELEMENT_ITEMS = [(str(s), f"{s} x {s}", f"{s * s} receiving elements per patch") for s in (1, 2, 4, 8, 16)]
+OUTPUT_ITEMS = [
+    ("PACK", "Pack into .blend", "Keep the lightmaps inside the .blend file"),
+    ("EXR", "EXR next to .blend", "Save <object>_lightmap.exr beside the saved .blend file"),
+]
+
+
+class RadiositySceneSettings(bpy.types.PropertyGroup):
+    method: EnumProperty(name="Method", items=METHOD_ITEMS, default=_DEFAULTS.method)
+    patch_mode: EnumProperty(name="Patches", default="SIZE", items=[
+        ("SIZE", "Patch Size", "Split faces into patches about Patch Size across; smaller faces stay one patch"),
+        ("SUBDIVISION", "Subdivision", "Split every face N x N, however big or small"),
+    ])
+    patch_size: FloatProperty(name="Patch Size", min=0.001, soft_max=10.0, default=0.5, unit="LENGTH",
+                              description="Largest patch edge: faces longer than this are split")
+    subdivision: IntProperty(name="Subdivision", min=1, soft_max=16, max=64, default=_DEFAULTS.subdiv,
+                             description="Each face is split N x N into patches (triangles into N² triangles)")
+    elements: EnumProperty(name="Elements", items=ELEMENT_ITEMS, default=str(_DEFAULTS.elements),
+                           description="Receiving elements per patch (progressive method)")
+    hemicube_resolution: IntProperty(name="Hemi-cube Resolution", min=8, max=1024, step=2,
+                                     default=_DEFAULTS.hemicube_res, subtype="PIXEL",
+                                     description="Pixels across the hemi-cube's top face (an even number)")
+    solver: EnumProperty(name="Solver", items=SOLVER_ITEMS, default=_DEFAULTS.solver,
+                         description="Linear solver of the hemi-cube method")
+    tolerance: FloatProperty(name="Tolerance", min=0.0, max=0.5, default=0.0, precision=6, step=0.01,
+                             description="Stop when the unshot power (progressive) or the change per sweep"
+                                         " (hemi-cube) falls under this fraction; 0 uses the method's default")
+    texel_density: FloatProperty(name="Texel Density", min=1.0, soft_max=1024.0, default=64.0,
+                                 description="Lightmap texels per metre (objects without a resolution override)")
+    max_resolution: IntProperty(name="Max Resolution", min=8, max=8192, default=1024, subtype="PIXEL",
+                                description="Largest lightmap side in texels")
+    uv_margin: FloatProperty(name="UV Margin", min=0.001, max=1.0, default=0.1,
+                             description="Margin of the Lightmap Pack used for meshes without a 'Lightmap'"
+                                         " UV map")
+    output: EnumProperty(name="Output", items=OUTPUT_ITEMS, default="PACK")
+    include_unselected: BoolProperty(name="Unselected Occlude", default=True,
+                                     description="Visible unselected meshes block and reflect light"
+                                                 " (they get no lightmap)")
+
+    def solve_settings(self) -> SolveSettings:
+        subdiv = 1 if self.patch_mode == "SIZE" else self.subdivision  # SIZE splits faces in the export
+        return SolveSettings(method=self.method, subdiv=subdiv, elements=int(self.elements),
+                             hemicube_res=self.hemicube_resolution, solver=self.solver,
+                             tolerance=self.tolerance or None)
+
+    def lightmap_options(self, objects) -> LightmapOptions:
+        overrides = {obj.name: obj.radiosity.lightmap_resolution for obj in objects
+                     if obj.radiosity.lightmap_resolution > 0}
+        return LightmapOptions(texel_density=self.texel_density, max_size=self.max_resolution,
+                               resolution_overrides=overrides)
+
+
+class RadiosityObjectSettings(bpy.types.PropertyGroup):
+    lightmap_resolution: IntProperty(name="Lightmap Resolution", min=0, max=8192, default=0, subtype="PIXEL",
+                                     description="Side of this object's lightmap in texels; 0 follows the"
+                                                 " scene's texel density")
+
+
+CLASSES = (RadiositySceneSettings, RadiosityObjectSettings)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.radiosity = PointerProperty(type=RadiositySceneSettings)
+    bpy.types.Object.radiosity = PointerProperty(type=RadiosityObjectSettings)
+
+
+def unregister():
+    del bpy.types.Object.radiosity
+    del bpy.types.Scene.radiosity
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,120 @@
+"""Shared set-up of the tests that drive the add-on through the `bpy` module.
+
+Import this before bpy: it points Blender's user directory at a temporary one so
+the tests never read or write the developer's Blender configuration.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="radiosity-blender-user-")
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLES = ROOT / "sample_blends"
+CORNELL = SAMPLES / "cornell_box.blend"
+ROOM = SAMPLES / "room.blend"
+
+
+def ensure_addon() -> None:
+    """Register the add-on from the source tree (once per process)."""
+    if not hasattr(bpy.types, "RADIOSITY_OT_bake"):
+        from radiosity_addon import blender
+
+        blender.register()
+
+
+def open_blend(path: Path, method: str = "hemicube", subdivision: int = 2):
+    """Open a file and choose quick solver settings; returns bpy.context."""
+    ensure_addon()
+    bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
+    settings = bpy.context.scene.radiosity
+    settings.method = method
+    settings.patch_mode = "SUBDIVISION"
+    settings.subdivision = subdivision
+    settings.hemicube_resolution = 32
+    settings.texel_density = 32.0
+    return bpy.context
+
+
+def select_only(objects) -> None:
+    bpy.context.view_layer.update()  # objects linked just now join the view layer on update
+    for obj in bpy.context.view_layer.objects:
+        obj.select_set(obj in objects)
+    if objects:
+        bpy.context.view_layer.objects.active = objects[0]
+
+
+def node_tree_state(tree) -> dict:
+    if tree is None:
+        return {}
+    nodes = {}
+    for node in tree.nodes:
+        inputs = {}
+        for socket in node.inputs:
+            value = getattr(socket, "default_value", None)
+            if value is not None and not isinstance(value, (str, bpy.types.ID)):
+                value = tuple(value) if hasattr(value, "__len__") else value
+            inputs[socket.identifier] = value if not isinstance(value, bpy.types.ID) else value.name
+        nodes[node.name] = {
+            "type": node.bl_idname,
+            "location": tuple(round(c, 3) for c in node.location),
+            "active_output": getattr(node, "is_active_output", None),
+            "target": getattr(node, "target", None),
+            "image": node.image.name if getattr(node, "image", None) else None,
+            "inputs": inputs,
+            "properties": sorted(node.keys()),
+        }
+    links = sorted((link.from_node.name, link.from_socket.identifier, link.to_node.name, link.to_socket.identifier)
+                   for link in tree.links)
+    return {"nodes": nodes, "links": links}
+
+
+def blend_state() -> dict:
+    """Everything a bake may touch, as plain data: equal states mean an unchanged file."""
+    return {
+        "images": sorted(image.name for image in bpy.data.images),
+        "materials": {m.name: {"tree": node_tree_state(m.node_tree), "properties": sorted(m.keys())}
+                      for m in bpy.data.materials},
+        "meshes": {mesh.name: {"uv": [(uv.name, uv.active, uv.active_render) for uv in mesh.uv_layers],
+                               "materials": [m.name if m else None for m in mesh.materials],
+                               "properties": sorted(mesh.keys()),
+                               "polygons": len(mesh.polygons)}
+                   for mesh in bpy.data.meshes},
+        "objects": {obj.name: {"slots": [(s.link, s.material.name if s.material else None)
+                                         for s in obj.material_slots],
+                               "properties": sorted(k for k in obj.keys() if k != "radiosity"),
+                               "selected": obj.select_get()}
+                    for obj in bpy.data.objects},
+    }
+
+
+def image_rgba(image) -> np.ndarray:
+    width, height = image.size
+    pixels = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    return pixels.reshape(height, width, 4)
+
+
+def lightmap_wiring(material) -> dict | None:
+    """What the active Material Output shows: None unless it is the add-on's lightmap chain."""
+    tree = material.node_tree
+    output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.is_active_output), None)
+    if output is None or not output.inputs["Surface"].is_linked:
+        return None
+    emission = output.inputs["Surface"].links[0].from_node
+    if emission.bl_idname != "ShaderNodeEmission" or not emission.inputs["Color"].is_linked:
+        return None
+    texture = emission.inputs["Color"].links[0].from_node
+    if texture.bl_idname != "ShaderNodeTexImage" or not texture.inputs["Vector"].is_linked:
+        return None
+    uv = texture.inputs["Vector"].links[0].from_node
+    if uv.bl_idname != "ShaderNodeUVMap":
+        return None
+    return {"image": texture.image.name if texture.image else None, "interpolation": texture.interpolation,
+            "uv_map": uv.uv_map}

@@ -1,0 +1,200 @@
+"""The add-on's bake through the bpy module: write-back, re-bake, restore, cancel and refusals."""
+
+from __future__ import annotations
+
+import blender_support as support  # noqa: F401  (sets BLENDER_USER_RESOURCES before bpy loads)
+import bpy
+import numpy as np
+import pytest
+
+from radiosity_addon.blender.bake import bake_blocking
+from radiosity_addon.core.solution import SolveCancelled
+
+
+def bake():
+    """The operator as a script calls it (EXEC_DEFAULT: blocks until done)."""
+    return bpy.ops.radiosity.bake()
+
+
+def mesh_objects():
+    return [obj for obj in bpy.context.scene.objects if obj.type == "MESH"]
+
+
+def test_cornell_bake_writes_an_image_uv_map_and_wiring_per_object():
+    support.open_blend(support.CORNELL)
+    baked = list(bpy.context.selected_objects)
+    assert len(baked) == 8
+    assert bake() == {"FINISHED"}
+    for obj in baked:
+        image = bpy.data.images.get(f"{obj.name}_lightmap")
+        assert image is not None, obj.name
+        assert image.is_float and image.packed_file is not None
+        rgba = support.image_rgba(image)
+        covered = rgba[..., 3] > 0
+        assert covered.mean() > 0.2, f"{obj.name}: lightmap mostly empty"
+        assert np.all(np.isfinite(rgba)) and rgba[..., :3][covered].max() > 0, obj.name
+        assert "Lightmap" in obj.data.uv_layers
+        for slot in obj.material_slots:
+            wiring = support.lightmap_wiring(slot.material)
+            assert wiring == {"image": image.name, "interpolation": "Linear", "uv_map": "Lightmap"}, obj.name
+    # the light is the brightest thing, the red wall is red, the green wall green
+    mean = {obj.name: support.image_rgba(bpy.data.images[f"{obj.name}_lightmap"])[..., :3].reshape(-1, 3)
+            [support.image_rgba(bpy.data.images[f"{obj.name}_lightmap"])[..., 3].ravel() > 0].mean(axis=0)
+            for obj in baked}
+    assert mean["light"].max() > 5 * max(m.max() for name, m in mean.items() if name != "light")
+    assert mean["left_wall"][0] > 2 * mean["left_wall"][1]
+    assert mean["right_wall"][1] > 2 * mean["right_wall"][0]
+
+
+def test_two_bakes_leave_one_image_per_object_and_no_extra_materials():
+    support.open_blend(support.CORNELL)
+    assert bake() == {"FINISHED"}
+    first = support.blend_state()
+    assert bake() == {"FINISHED"}
+    second = support.blend_state()
+    assert second["images"] == first["images"] == sorted(f"{o.name}_lightmap" for o in mesh_objects())
+    assert sorted(second["materials"]) == sorted(first["materials"])
+    assert second == first
+
+
+@pytest.mark.parametrize("sample", [support.CORNELL, support.ROOM], ids=["cornell", "room"])
+def test_restore_brings_back_the_original_node_trees(sample):
+    support.open_blend(sample)
+    before = support.blend_state()
+    assert bake() == {"FINISHED"}
+    assert support.blend_state() != before
+    assert bpy.ops.radiosity.remove_bake() == {"FINISHED"}
+    assert support.blend_state() == before
+
+
+def test_room_with_ngon_triangles_modifier_and_materials_bakes():
+    support.open_blend(support.ROOM)
+    assert bake() == {"FINISHED"}
+    for obj in mesh_objects():
+        image = bpy.data.images[f"{obj.name}_lightmap"]
+        rgba = support.image_rgba(image)
+        assert rgba[..., 3].any() and rgba[..., :3].max() > 0, obj.name
+    # two materials on the room mesh, each showing the room's lightmap
+    room = bpy.data.objects["Room"]
+    assert len(room.material_slots) == 2
+    for slot in room.material_slots:
+        assert support.lightmap_wiring(slot.material)["image"] == "Room_lightmap"
+
+
+def test_cancel_leaves_the_file_unchanged():
+    context = support.open_blend(support.CORNELL)
+    before = support.blend_state()
+    with pytest.raises(SolveCancelled):
+        bake_blocking(context, context.scene.radiosity, should_cancel=lambda: True)
+    assert support.blend_state() == before
+
+
+def refused(message_part: str):
+    before = support.blend_state()
+    with pytest.raises(RuntimeError) as error:
+        bake()
+    text = str(error.value).strip()
+    assert len(text.splitlines()) == 1 and "Traceback" not in text, text
+    assert message_part in text, text
+    assert support.blend_state() == before
+
+
+def test_no_selection_is_refused_unchanged():
+    support.open_blend(support.CORNELL)
+    support.select_only([])
+    refused("select the mesh objects")
+
+
+def test_non_mesh_selection_is_refused_unchanged():
+    support.open_blend(support.CORNELL)
+    support.select_only([bpy.context.scene.camera])
+    refused("no mesh among the selected objects")
+
+
+def test_scene_without_emitter_is_refused_unchanged():
+    support.open_blend(support.CORNELL)
+    light = bpy.data.objects["light"]
+    bpy.data.objects.remove(light)
+    support.select_only(mesh_objects())
+    refused("nothing emits light")
+
+
+def test_mesh_without_faces_is_refused_unchanged():
+    support.open_blend(support.CORNELL)
+    mesh = bpy.data.meshes.new("loose")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0)], [(0, 1)], [])
+    loose = bpy.data.objects.new("loose", mesh)
+    bpy.context.scene.collection.objects.link(loose)
+    support.select_only(mesh_objects())
+    refused("has no faces")
+
+
+def test_nan_vertices_are_refused_unchanged():
+    support.open_blend(support.CORNELL)
+    floor = bpy.data.objects["floor"]
+    floor.data.vertices[0].co = (float("nan"), 0.0, 0.0)
+    refused("NaN")
+
+
+def test_failure_after_the_solve_leaves_the_file_unchanged(monkeypatch):
+    """An error in the worker (here: the lightmap stage) rolls back the UV maps made for the bake."""
+    from radiosity_addon.blender import worker
+    from radiosity_addon.core.solution import SolveError
+
+    def broken(*args, **kwargs):
+        raise SolveError("simulated lightmap failure")
+
+    monkeypatch.setattr(worker, "lightmap_images", broken)
+    support.open_blend(support.CORNELL)
+    refused("simulated lightmap failure")
+
+
+def test_exr_output_is_written_next_to_the_saved_file(tmp_path):
+    support.open_blend(support.CORNELL)
+    bpy.context.scene.radiosity.output = "EXR"
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "copy.blend"))
+    assert bake() == {"FINISHED"}
+    assert sorted(p.name for p in tmp_path.glob("*.exr")) == sorted(f"{o.name}_lightmap.exr" for o in mesh_objects())
+    image = bpy.data.images["floor_lightmap"]
+    assert image.filepath == "//floor_lightmap.exr" and image.packed_file is None
+
+
+def test_exr_output_of_an_unsaved_file_is_refused_unchanged():
+    support.ensure_addon()
+    bpy.ops.wm.read_homefile(use_empty=True)
+    mesh = bpy.data.meshes.new("quad")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)], [], [(0, 1, 2, 3)])
+    quad = bpy.data.objects.new("quad", mesh)
+    bpy.context.scene.collection.objects.link(quad)
+    support.select_only([quad])
+    bpy.context.scene.radiosity.output = "EXR"
+    refused("save the .blend first")
+
+
+def test_missing_opengl_is_one_line_and_leaves_the_file_unchanged(monkeypatch):
+    from radiosity_addon.blender import worker
+    from radiosity_addon.core.gl import GLUnavailable
+
+    def no_gl():
+        raise GLUnavailable("cannot create an OpenGL 4.3 context (simulated)")
+
+    monkeypatch.setattr(worker.gl, "create_context", no_gl)
+    support.open_blend(support.CORNELL)
+    refused("OpenGL 4.3")
+
+
+def test_a_shared_material_in_two_slots_gets_one_copy_and_restores():
+    support.open_blend(support.CORNELL)
+    floor = bpy.data.objects["floor"]
+    white = floor.material_slots[0].material
+    floor.data.materials.append(white)  # a second slot showing the same shared material
+    floor.data.polygons[0].material_index = 1
+    support.select_only([floor])  # the walls keep showing White: the floor needs a copy
+    before = support.blend_state()
+    assert bake() == {"FINISHED"}
+    shown = {slot.material.name for slot in floor.material_slots}
+    assert len(shown) == 1 and shown != {white.name}
+    assert support.lightmap_wiring(floor.material_slots[1].material)["image"] == "floor_lightmap"
+    assert support.lightmap_wiring(white) is None
+    assert bpy.ops.radiosity.remove_bake() == {"FINISHED"}
+    assert support.blend_state() == before

@@ -1,0 +1,106 @@
+"""`make extension`: fetch the bundled wheels, build one zip per platform, validate each zip.
+
+    python tools/build_extension.py [--output-dir dist]
+
+Wheels (moderngl + glcontext for CPython 3.11 = Blender 4.2-5.0 and 3.13 = Blender
+5.1+) are downloaded into wheels/ by pip (gitignored, never committed); numpy ships
+with Blender and is not bundled. The manifest's `wheels` list must name exactly what
+was downloaded, so a version bump that forgets the manifest fails here, not in
+Blender. Blender's own tool (`blender_ext.py`, carried by the bpy wheel) builds and
+validates.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+WHEELS_DIR = ROOT / "wheels"
+REQUIREMENTS = ("moderngl==5.13.0", "glcontext==3.1.0")
+PYTHON_VERSIONS = ("3.11", "3.13")
+# Blender platform -> pip platform tags (pip picks the best wheel among them)
+PLATFORM_TAGS = {
+    "linux-x64": ["manylinux_2_28_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64",
+                  "manylinux_2_5_x86_64", "manylinux1_x86_64"],
+    "windows-x64": ["win_amd64"],
+    "macos-arm64": ["macosx_11_0_arm64"],
+}
+
+
+def blender_ext_script() -> Path:
+    spec = importlib.util.find_spec("bpy")
+    if spec is None or spec.origin is None:
+        sys.exit("error: the bpy module is needed for Blender's extension tool (make setup installs it)")
+    found = sorted(Path(spec.origin).parent.glob("*/scripts/addons_core/bl_pkg/cli/blender_ext.py"))
+    if not found:
+        sys.exit("error: blender_ext.py not found in the bpy package")
+    return found[-1]
+
+
+def download_wheels() -> set[str]:
+    WHEELS_DIR.mkdir(exist_ok=True)
+    for tags in PLATFORM_TAGS.values():
+        for python in PYTHON_VERSIONS:
+            command = [sys.executable, "-m", "pip", "download", "--quiet", "--disable-pip-version-check",
+                       "--only-binary=:all:", "--no-deps", "--python-version", python,
+                       "--dest", str(WHEELS_DIR), *[arg for tag in tags for arg in ("--platform", tag)],
+                       *REQUIREMENTS]
+            result = subprocess.run(command, capture_output=True, text=True)
+            if result.returncode != 0:
+                errors = [line for line in result.stderr.splitlines() if line.startswith("ERROR")]
+                sys.exit(f"error: pip could not download the wheels for Python {python} {tags[0]}:"
+                         f" {errors[0] if errors else result.stderr.strip()[-300:]}")
+    return {f"./wheels/{path.name}" for path in WHEELS_DIR.glob("*.whl")}
+
+
+def check_manifest(downloaded: set[str]) -> dict:
+    manifest = tomllib.loads((ROOT / "blender_manifest.toml").read_text())
+    listed = set(manifest.get("wheels", []))
+    missing = sorted(listed - downloaded)
+    if missing:
+        sys.exit(f"error: the manifest lists wheels that were not downloaded: {', '.join(missing)}")
+    wanted = {w for w in downloaded if any(w.split("/")[-1].startswith(r.replace("==", "-")) for r in REQUIREMENTS)}
+    unlisted = sorted(wanted - listed)
+    if unlisted:
+        sys.exit(f"error: blender_manifest.toml does not list these wheels: {', '.join(unlisted)}")
+    return manifest
+
+
+def run(script: Path, *args: str) -> str:
+    result = subprocess.run([sys.executable, str(script), *args], capture_output=True, text=True, cwd=ROOT)
+    if result.returncode != 0:
+        sys.exit(f"error: blender_ext.py {args[0]} failed:\n{result.stdout}{result.stderr}")
+    return result.stdout
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--output-dir", default=str(ROOT / "dist"))
+    args = parser.parse_args(argv)
+    script = blender_ext_script()
+    manifest = check_manifest(download_wheels())
+    output = Path(args.output_dir).resolve()
+    output.mkdir(parents=True, exist_ok=True)
+    prefix = f"{manifest['id']}-{manifest['version']}"
+    for old in output.glob(f"{prefix}-*.zip"):
+        old.unlink()
+    run(script, "validate", str(ROOT))
+    run(script, "build", "--source-dir", str(ROOT), "--output-dir", str(output), "--split-platforms")
+    zips = sorted(output.glob(f"{prefix}-*.zip"))
+    if len(zips) != len(manifest["platforms"]):
+        sys.exit(f"error: expected one zip per platform ({', '.join(manifest['platforms'])}), got"
+                 f" {', '.join(z.name for z in zips) or 'none'}")
+    for archive in zips:
+        run(script, "validate", str(archive))
+        print(f"built and validated {archive.relative_to(ROOT) if archive.is_relative_to(ROOT) else archive}"
+              f" ({archive.stat().st_size // 1024} KiB)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
