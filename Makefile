@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.requirements-installed
 OUT ?= out
 
-.PHONY: setup check-system demo test bench bench-quick extension samples bake-sample clean
+.PHONY: setup check-system demo test bench bench-quick extension samples clean
 
 setup: check-system $(STAMP)
 
@@ -21,10 +21,12 @@ $(STAMP): requirements.txt
 	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements.txt
 	touch $@
 
+# the main job: bake the Cornell sample through the add-on (bpy module) — EXR lightmaps,
+# the baked .blend, a preview render and the solve report in out/
 demo: setup
-	$(PY) -m radiosity_addon solve cornell-box --method hemicube --subdiv 6 \
-	  --output $(OUT)/cornell-box.npz --report $(OUT)/cornell-box-report.json \
-	  --lightmaps $(OUT)/lightmaps --texel-density 256 --preview $(OUT)/cornell-box-preview.png
+	$(PY) -m radiosity_addon bake sample_blends/cornell_box.blend --output-dir $(OUT)/cornell-lightmaps \
+	  --save-as $(OUT)/cornell_box_baked.blend --preview $(OUT)/cornell-box-preview.png \
+	  --report $(OUT)/cornell-box-report.json
 
 test: setup
 	$(PY) -m pytest
@@ -33,11 +35,6 @@ test: setup
 # (downloads the moderngl/glcontext wheels into wheels/, builds and validates with Blender's tool)
 extension: setup
 	$(PY) tools/build_extension.py --output-dir dist
-
-# the Cornell sample baked through the add-on: EXRs, a baked .blend and a preview render in out/
-bake-sample: setup
-	$(PY) -m radiosity_addon bake sample_blends/cornell_box.blend --output-dir $(OUT)/cornell-lightmaps \
-	  --save-as $(OUT)/cornell_box_baked.blend --preview $(OUT)/cornell_box_preview.png
 
 # sample_blends/*.blend from the bundled Cornell box and a hand-made room
 samples: setup

@@ -152,13 +152,17 @@ def command_solve(args) -> int:
     if args.output:
         Path(args.output).parent.mkdir(parents=True, exist_ok=True)
         np.savez_compressed(args.output, **solution.npz_arrays())
-    if args.report:
-        Path(args.report).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.report).write_text(json.dumps(report, indent=2))
+    write_report(report, args.report)
     counts, timings = report["counts"], report["timings"]
     print(f"{report['method']}: {counts['patches']} patches, {counts['elements']} elements,"
           f" {timings['total']:.2f} s ({', '.join(f'{k} {v:.2f}' for k, v in timings.items() if k != 'total')})")
     return 0
+
+
+def write_report(report: dict, path: str | None) -> None:
+    if path:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Path(path).write_text(json.dumps(report, indent=2))
 
 
 def command_bake(args) -> int:
@@ -170,12 +174,13 @@ def command_bake(args) -> int:
     from .blender.headless import bake_file
 
     progress = print_progress(args.quiet)
-    summary = bake_file(args.file, settings_from_args(args), objects=args.objects, output_dir=args.output_dir,
+    summary, report = bake_file(args.file, settings_from_args(args), objects=args.objects, output_dir=args.output_dir,
                         save_as=args.save_as, preview=args.preview, texel_density=args.texel_density,
                         max_resolution=args.max_lightmap_size, preview_size=args.preview_size,
                         patch_size=args.patch_size,
                         progress=(lambda p: progress(p.fraction, p.message, {})) if progress else None)
     PROGRESS.end()
+    write_report(report, args.report)
     print(summary)
     return 0
 
@@ -223,6 +228,7 @@ def build_parser() -> argparse.ArgumentParser:
                                   " (default 256)")
     bake_parser.add_argument("--texel-density", type=float, metavar="D",
                              help="lightmap texels per metre (default: the file's setting, 64)")
+    bake_parser.add_argument("--report", metavar="REPORT.json", help="write the solve's timings/effects report")
     bake_parser.add_argument("--max-lightmap-size", type=int, metavar="PX", help="largest lightmap side")
     add_solver_options(bake_parser)
     bake_parser.add_argument("--quiet", action="store_true", help="no progress line")

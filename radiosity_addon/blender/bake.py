@@ -33,6 +33,8 @@ class BakePlan:
     added_uv_meshes: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
     started: float = field(default_factory=time.monotonic)
+    report: dict = field(default_factory=dict)  # the solve's report, once finished
+    summary: str = ""
 
 
 def choose_objects(context, objects=None) -> list:
@@ -99,6 +101,7 @@ def finish(plan: BakePlan) -> str:
             raise BakeError(str(error)) from None
         raise error if error is not None else BakeError("the bake stopped without a result")
     images, report = worker.result
+    plan.report = report
     try:
         written = apply.write_images(images, plan.output, plan.directory)
     except BaseException:
@@ -119,7 +122,7 @@ def finish(plan: BakePlan) -> str:
 
 def bake_blocking(context, settings, objects=None, output_dir=None, should_cancel=None, on_progress=None):
     """Scripts, background mode and the command line: the whole bake, waiting for the worker.
-    Returns (summary line, warnings)."""
+    Returns the finished plan: its summary line, warnings and the solve's report."""
     plan = prepare(context, settings, objects, output_dir)
     plan.worker.start()
     try:
@@ -133,4 +136,5 @@ def bake_blocking(context, settings, objects=None, output_dir=None, should_cance
         plan.worker.wait()
         rollback(plan)
         raise
-    return finish(plan), plan.warnings
+    plan.summary = finish(plan)
+    return plan

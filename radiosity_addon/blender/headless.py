@@ -83,8 +83,8 @@ def render_preview(path: Path, size: int = 256, samples: int = 8) -> None:
 def bake_file(blend: str, solve_settings: SolveSettings, objects: str | None = None, output_dir: str | None = None,
               save_as: str | None = None, preview: str | None = None, texel_density: float | None = None,
               max_resolution: int | None = None, preview_size: int = 256, patch_size: float | None = None,
-              progress=None) -> str:
-    """Bake FILE.blend; returns the summary line. User errors raise BakeError (one line)."""
+              progress=None):
+    """Bake FILE.blend; returns (summary line, the solve's report). User errors raise BakeError (one line)."""
     path = Path(blend)
     if not path.is_file():
         raise BakeError(f"file '{blend}' does not exist")
@@ -98,10 +98,9 @@ def bake_file(blend: str, solve_settings: SolveSettings, objects: str | None = N
     settings = CommandLineSettings(scene.radiosity, solve_settings, texel_density, max_resolution, patch_size)
     if output_dir is None:
         scene.radiosity.output = "PACK"
-    summary, warnings = bake_blocking(bpy.context, settings, objects=chosen_objects(objects),
-                                      output_dir=Path(output_dir).resolve() if output_dir else None,
-                                      on_progress=progress)
-    for line in warnings:
+    plan = bake_blocking(bpy.context, settings, objects=chosen_objects(objects),
+                         output_dir=Path(output_dir).resolve() if output_dir else None, on_progress=progress)
+    for line in plan.warnings:
         print(f"warning: {line}", file=sys.stderr)
     if save_as is not None:
         target = Path(save_as).resolve()
@@ -109,6 +108,6 @@ def bake_file(blend: str, solve_settings: SolveSettings, objects: str | None = N
         bpy.ops.wm.save_as_mainfile(filepath=str(target), relative_remap=True)
     if preview is not None:
         render_preview(Path(preview).resolve(), preview_size)
-    return summary
+    return plan.summary, plan.report
 
 

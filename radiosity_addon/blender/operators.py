@@ -58,12 +58,12 @@ class RADIOSITY_OT_bake(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            summary, warnings = bake_blocking(context, context.scene.radiosity)
+            plan = bake_blocking(context, context.scene.radiosity)
         except Exception as error:
             return _report_failure(self, error)
-        for line in warnings:
+        for line in plan.warnings:
             self.report({"WARNING"}, line)
-        self.report({"INFO"}, f"Radiosity bake: {summary}")
+        self.report({"INFO"}, f"Radiosity bake: {plan.summary}")
         return {"FINISHED"}
 
     def invoke(self, context, event):
