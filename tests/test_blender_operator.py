@@ -234,7 +234,7 @@ def test_patch_size_mode_bakes_through_the_operator():
                for obj in bpy.context.scene.objects if obj.type == "MESH")
 
 
-def test_mirrored_objects_keep_their_fronts_and_lamps_are_reported_as_ignored():
+def test_mirrored_objects_keep_their_fronts_and_visible_lamps_are_exported():
     from radiosity_addon.blender.export import export_scene
 
     context = support.open_blend(support.ROOM)
@@ -252,7 +252,7 @@ def test_mirrored_objects_keep_their_fronts_and_lamps_are_reported_as_ignored():
     support.select_only([bpy.data.objects["Room"]])
     plan = prepare(context, context.scene.radiosity)
     try:
-        assert any("lamp(s) ignored" in line for line in plan.warnings)
+        assert [light["name"] for light in plan.worker.scene.extras["lights"]] == ["Lamp"]
     finally:
         from radiosity_addon.blender.bake import rollback
 

@@ -18,6 +18,7 @@ from . import apply
 from .errors import BakeError
 from .export import export_scene
 from .lightmap_uv import add_lightmap_uvs, remove_lightmap_uvs
+from .lights import scene_lamps
 from .worker import BakeWorker
 
 # errors the user can cause: reported as their message, one line
@@ -71,16 +72,14 @@ def prepare(context, settings, objects=None, output_dir=None) -> BakePlan:
     added = add_lightmap_uvs(baked, settings.uv_margin)
     try:
         exported = export_scene(context.evaluated_depsgraph_get(), baked, occluders,
-                                patch_size=settings.patch_size if settings.patch_mode == "SIZE" else 0.0)
+                                patch_size=settings.patch_size if settings.patch_mode == "SIZE" else 0.0,
+                                lamps=scene_lamps(context.view_layer), world=context.scene.world)
     except BaseException:
         remove_lightmap_uvs(added)
         raise
     worker = BakeWorker(exported.scene, solve_settings, exported.baked_objects,
                         settings.lightmap_options(baked))
     warnings = list(exported.warnings)
-    lamps = [obj for obj in context.view_layer.objects if obj.type == "LIGHT" and obj.visible_get()]
-    if lamps:
-        warnings.append(f"{len(lamps)} lamp(s) ignored: the bake is lit by emissive materials only")
     return BakePlan(objects=baked, worker=worker, output=output, directory=directory,
                     added_uv_meshes=added, warnings=warnings)
 

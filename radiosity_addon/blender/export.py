@@ -15,6 +15,7 @@ import numpy as np
 
 from ..core.scene import PLANARITY_TOLERANCE, Scene, SceneError, Surface, check_has_emitter
 from .errors import BakeError
+from .lights import export_lights
 from .materials import MaterialReader
 from .tags import LIGHTMAP_UV
 
@@ -184,10 +185,11 @@ class MeshExporter:
         return int(valid.sum())
 
 
-def export_scene(depsgraph, baked, occluders, patch_size: float = 0.0) -> ExportedScene:
+def export_scene(depsgraph, baked, occluders, patch_size: float = 0.0, lamps=(), world=None) -> ExportedScene:
     """`baked`: mesh objects that get lightmaps (each needs a 'Lightmap' UV map); `occluders`: other
     mesh objects that only take part in the light transport. `patch_size` > 0 splits faces into
-    surfaces about that size (then solve with subdivision 1)."""
+    surfaces about that size (then solve with subdivision 1). `lamps` (light objects, see
+    `lights.scene_lamps`) and `world` go into the scene's extras as "lights" and "world"."""
     exporter = MeshExporter(patch_size)
     for obj in baked:
         exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=True)
@@ -195,11 +197,12 @@ def export_scene(depsgraph, baked, occluders, patch_size: float = 0.0) -> Export
         exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=False)
     if not exporter.surfaces:
         raise BakeError("nothing to bake: the selected objects have no faces")
-    scene = Scene(surfaces=exporter.surfaces)
+    extras, light_warnings = export_lights(depsgraph, lamps, world)
+    scene = Scene(surfaces=exporter.surfaces, extras=extras)
     try:
         check_has_emitter(scene)
     except SceneError:
-        raise BakeError("nothing emits light: give a mesh an emissive material (Emission Strength > 0);"
-                        " lamps are not baked") from None
+        raise BakeError("nothing emits light: add a lamp, give the world a colour, or give a mesh an"
+                        " emissive material (Emission Strength > 0)") from None
     return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked],
-                         warnings=exporter.materials.warnings + exporter.warnings)
+                         warnings=exporter.materials.warnings + exporter.warnings + light_warnings)
