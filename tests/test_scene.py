@@ -109,3 +109,10 @@ def test_closed_cube_builder_faces_inward():
     scene = scene_from_dict(closed_cube())
     for surf in scene.surfaces:
         assert (np.array([0.5, 0.5, 0.5]) - surf.vertices.mean(axis=0)) @ surf.normal > 0
+
+
+def test_a_world_colour_alone_counts_as_an_emitter_and_a_black_one_does_not():
+    dark = one_surface(emission=[0, 0, 0])
+    assert scene_from_dict({**dark, "world": {"color": [0.2, 0.3, 0.5]}}).extras["world"]["color"] == [0.2, 0.3, 0.5]
+    with pytest.raises(SceneError, match="nothing emits"):
+        scene_from_dict({**dark, "world": {"color": [0, 0, 0]}})
