@@ -133,6 +133,22 @@ def test_area_lamp_corners_face_along_its_minus_z_with_the_lamp_area(shape, size
         assert np.dot(np.cross(b - a, c - b), minus_z) > 0
 
 
+def test_normalize_off_temperature_and_exposure_convert_as_in_cycles():
+    """Factors measured on Cycles 5.0 (a plane under each lamp, Normalize on vs off)."""
+    build_scene()
+    add_lamp("POINT", (0, 0, 2), name="Point", energy=10.0, shadow_soft_size=0.25, normalize=False)
+    add_lamp("SUN", (0, 0, 2), name="Sun", energy=1.0, angle=0.2, normalize=False)
+    add_lamp("AREA", (0, 0, 2), name="Area", energy=10.0, size=0.5, normalize=False)
+    add_lamp("SPOT", (0, 0, 2), name="Warm", energy=10.0, use_temperature=True, temperature=3000, exposure=-1)
+    lights = {light["name"]: light for light in exported_extras()[0]["lights"]}
+    assert np.isclose(lights["Point"]["power"], 10.0 * 4 * math.pi * 0.25 ** 2)
+    assert np.isclose(lights["Sun"]["strength"], math.pi * math.sin(0.1) ** 2)
+    assert np.isclose(lights["Area"]["power"], 10.0 * 0.25)
+    warm = bpy.data.lights["Warm"]
+    assert np.isclose(lights["Warm"]["power"], 5.0)
+    assert np.allclose(lights["Warm"]["color"], np.array(LAMP_COLOUR) * np.array(warm.temperature_color))
+
+
 def test_hidden_and_disabled_lamps_are_skipped():
     build_scene()
     add_lamp("POINT", (0, 0, 2), name="Shown")

@@ -12,6 +12,9 @@ are only read out of Blender, in world space:
   equal area;
 - world: `color` = Background colour x Strength, left out when black.
 
+Exposure (x 2^exposure), a blackbody temperature (x its colour) and Normalize off (x the
+lamp's area: 4 pi r^2 for a point or spot of radius r, the rectangle's area, pi sin^2(angle/2)
+for a sun) are converted as Cycles 5.0 applies them (measured with a bake of a plane).
 What the bake cannot follow (lamp node trees, a narrowed area spread, square spots,
 a textured sky, ...) is converted as closely as it can be and named in a warning.
 """
@@ -77,7 +80,7 @@ class LightReader:
         entry = {"name": obj.name, "type": light.type.lower(), "color": _vector(color)}
         if light.type in ("POINT", "SPOT"):
             if not getattr(light, "normalize", True) and light.shadow_soft_size > 0:
-                self.warn(obj, "Normalize is off; baked as if it were on")
+                energy *= 4 * math.pi * light.shadow_soft_size ** 2  # Cycles: power per sphere area
             entry.update(position=_vector(origin), power=energy)
             if light.type == "SPOT":
                 if light.use_square:
@@ -89,7 +92,7 @@ class LightReader:
                              spot_blend=float(light.spot_blend))
         elif light.type == "SUN":
             if not getattr(light, "normalize", True) and light.angle > 0:
-                self.warn(obj, "Normalize is off; baked as if it were on")
+                energy *= math.pi * math.sin(light.angle / 2) ** 2  # Cycles: strength per disk of the sky
             entry.update(direction=_vector(direction), strength=energy)
         elif light.type == "AREA":
             corners = self.area_corners(obj, light, matrix)
@@ -97,7 +100,7 @@ class LightReader:
                 return None
             if not getattr(light, "normalize", True):
                 edge_u, edge_v = corners[1] - corners[0], corners[3] - corners[0]
-                energy *= float(np.linalg.norm(np.cross(edge_u, edge_v)))  # power was per unit area
+                energy *= float(np.linalg.norm(np.cross(edge_u, edge_v)))  # Cycles: power per unit area
             if getattr(light, "spread", math.pi) < math.pi - 1e-4:
                 self.warn(obj, "its spread is narrower than 180 degrees; baked as a fully diffuse emitter")
             entry.update(vertices=[_vector(c) for c in corners], power=energy)
