@@ -63,6 +63,8 @@ class LightReader:
             return None
         if getattr(light, "use_nodes", False) and light.node_tree is not None:
             self.warn(obj, "its node tree is ignored; baked with its colour and power")
+        if not getattr(light, "use_shadow", True):
+            self.warn(obj, "casts no shadows in Cycles but does in the bake")
         color = np.array(light.color[:3], dtype=np.float64)
         if getattr(light, "use_temperature", False):
             color = color * np.array(light.temperature_color[:3], dtype=np.float64)
