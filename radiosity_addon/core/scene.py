@@ -192,10 +192,13 @@ def scene_from_dict(data: dict, require_emitter: bool = True) -> Scene:
 
 
 def check_has_emitter(scene: Scene) -> None:
-    if not any(np.any(s.emission > 0) for s in scene.surfaces) and not scene.extras.get("lights"):
+    """Refuse a scene with no emissive surface, no lamp that emits and no world colour."""
+    from .effects import emitter_count  # effects reads the lamps, which build on this module
+
+    if emitter_count(scene) == 0:
         raise SceneError(
             "scene: nothing emits light; give at least one surface a positive emission"
-            " (an emissive material) before baking"
+            " (an emissive material), a lamp or a world colour before baking"
         )
 
 
