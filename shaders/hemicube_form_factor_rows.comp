@@ -11,7 +11,7 @@ layout(std430, binding = 2) buffer Rows { uint row[]; };
 uniform ivec2 tile_size;
 uniform int tiles_per_row;
 uniform int slots;
-uniform int patch_count;
+uniform int row_length;  // patches + 1: the last column sums the backs of patches
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
@@ -22,6 +22,6 @@ void main() {
     ivec2 origin = ivec2(slot % tiles_per_row, slot / tiles_per_row) * tile_size;
     uint item = texelFetch(item_buffer, origin + pixel, 0).r;
     if (item != 0u) {
-        atomicAdd(row[slot * patch_count + int(item) - 1], delta_form_factor[pixel.y * tile_size.x + pixel.x]);
+        atomicAdd(row[slot * row_length + int(item) - 1], delta_form_factor[pixel.y * tile_size.x + pixel.x]);
     }
 }

@@ -17,6 +17,7 @@ in float in_up_min;     // -1 for the top face, 0 for the half side faces
 
 uniform float near;
 uniform float far;
+uniform uint back_item;  // what the back of a patch writes: it hides the sky but receives nothing
 
 flat out uint item;
 out float gl_ClipDistance[5];
@@ -41,6 +42,6 @@ void main() {
     float z = (c * (far + near) - 2.0 * far * near) / (far - near);
     gl_Position = vec4(x, y, z, c);
 
-    // Backs of patches occlude but receive nothing: item 0 means "no patch".
-    item = dot(in_eye - in_position, in_normal) > 0.0 ? in_patch + 1u : 0u;
+    // Item 0 means nothing is seen (sky); backs of patches get their own item.
+    item = dot(in_eye - in_position, in_normal) > 0.0 ? in_patch + 1u : back_item;
 }

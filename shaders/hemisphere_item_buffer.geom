@@ -23,6 +23,7 @@ uniform vec3 axis_z;      // the hemisphere's pole (the shooter's normal)
 uniform float near;
 uniform float far;
 uniform int skip_patch;   // the shooter itself is not drawn (-1: draw all)
+uniform float ortho_extent;  // > 0: orthographic along axis_z over this half-width (a sun)
 
 flat out uint item;
 out float distance;   // from the eye, for the lookup's occluder test
@@ -36,8 +37,9 @@ vec3 corner(float s, float t) {
 void emit(vec3 position, uint id) {
     vec3 d = position - eye;
     vec3 q = vec3(dot(d, axis_x), dot(d, axis_y), dot(d, axis_z));
-    distance = max(length(q), 1e-20);
-    gl_Position = vec4(q.xy / distance, 2.0 * (distance - near) / (far - near) - 1.0, 1.0);
+    distance = ortho_extent > 0.0 ? q.z : max(length(q), 1e-20);
+    vec2 image = ortho_extent > 0.0 ? q.xy / ortho_extent : q.xy / distance;
+    gl_Position = vec4(image, 2.0 * (distance - near) / (far - near) - 1.0, 1.0);
     gl_ClipDistance[0] = q.z;  // the front hemisphere only
     item = id;
     EmitVertex();

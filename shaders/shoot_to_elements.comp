@@ -14,7 +14,15 @@
 // Each work group also sums the shot's hit fraction and reflected fractions
 // (per channel) of the shooter's power, added in fixed point to `energy`.
 //
-// Defines: ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN, RECORD_VISIBILITY.
+// Lamps shoot too (shooter_kind): a point lamp gives F = cos_recv / (pi r^2) times
+// its spot falloff (shooter_radiosity is then its radiant intensity), a sun
+// F = cos_recv / pi (shooter_radiosity: its irradiance), looked up in an
+// orthographic item buffer; the sky (kind 3) F = each element's unoccluded
+// cosine-weighted fraction of its hemisphere (shooter_radiosity: the world colour).
+//
+// Defines: ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN, RECORD_VISIBILITY,
+// OCCLUSION (0: the scene analysis proved nothing occludes, V = 1 for facing receivers),
+// INTERREFLECTION (0: nothing a receiver reflects can reach a reflector, so no residual).
 layout(local_size_x = 64) in;
 
 layout(rgba32f, binding = 0) uniform image2D radiosity;
@@ -28,6 +36,7 @@ layout(std430, binding = 2) readonly buffer Reflectance { vec4 reflectance[]; };
 layout(std430, binding = 3) readonly buffer ElementWeight { float element_weight[]; };  // a_e S^2 / A
 layout(std430, binding = 4) buffer Energy { uint energy[4]; };
 layout(std430, binding = 7) readonly buffer Plane { int plane_of[]; };  // patches of one planar surface share it
+layout(std430, binding = 8) readonly buffer Sky { float sky_fraction[]; };  // per element (kind 3)
 #if RECORD_VISIBILITY
 layout(std430, binding = 5) writeonly buffer Visibility { float visibility_out[]; };
 #endif
@@ -45,6 +54,11 @@ uniform vec3 shooter_normal;
 uniform vec3 shooter_polygon[4];    // corners, counter-clockwise from the front
 uniform float shooter_area;
 uniform vec3 shooter_radiosity;     // unshot radiosity being shot
+uniform int shooter_kind;           // 0: patch polygon, 1: point lamp, 2: directional (sun), 3: sky
+uniform vec3 light_direction;       // spot axis, or the sun's travel direction
+uniform float spot_cos_half;        // cosine of half the spot cone (-1: all around)
+uniform float spot_smooth;          // (1 - spot_cos_half) * blend: width of the soft edge
+uniform float ortho_extent;         // > 0: the item buffer is orthographic over this half-width
 
 const float PI = 3.14159265358979;
 const float ENERGY_ONE = 1073741824.0;  // 2^30
@@ -60,8 +74,11 @@ float visibility(vec3 x, vec3 n, int p) {
     if (q.z <= 0.0) {
         return 0.0;  // behind the shooter
     }
+#if !OCCLUSION
+    return 1.0;
+#endif
     float r = length(q);
-    vec2 uv = q.xy / r * 0.5 + 0.5;
+    vec2 uv = (ortho_extent > 0.0 ? q.xy / ortho_extent : q.xy / r) * 0.5 + 0.5;
     ivec2 texel = clamp(ivec2(floor(uv * float(item_resolution))), ivec2(0), ivec2(item_resolution - 1));
     // A planar surface cannot hide its own points, so any patch of the receiver's plane
     // seen there counts (patch borders inside a surface are then no obstacle).
@@ -73,6 +90,9 @@ float visibility(vec3 x, vec3 n, int p) {
     // Optionally (OCCLUDER_MARGIN >= 0) the search is for rasterization gaps only, not
     // for peeking past occluders: when the own texel shows something clearly nearer,
     // the receiver is hidden.
+    if (ortho_extent > 0.0) {
+        r = q.z;  // the orthographic map's distances run along its axis
+    }
     float seen = texelFetch(distance_map, texel, 0).r;
     if (OCCLUDER_MARGIN >= 0.0 && seen > 0.0 && seen < r * (1.0 - OCCLUDER_MARGIN)) {
         return 0.0;
@@ -125,6 +145,16 @@ float polygon_form_factor(vec3 x, vec3 n) {
     return max(-sum, 0.0) / (2.0 * PI);
 }
 
+// A point lamp: irradiance I cos / r^2, so the radiance-equivalent factor is cos / (pi r^2).
+float point_lamp_factor(vec3 x, vec3 n) {
+    vec3 d = x - shooter_position;
+    float r2 = dot(d, d);
+    vec3 u = d / sqrt(r2);
+    float t = spot_smooth > 0.0 ? clamp((dot(u, light_direction) - spot_cos_half) / spot_smooth, 0.0, 1.0)
+                                : float(dot(u, light_direction) > spot_cos_half);
+    return max(-dot(n, u), 0.0) * t * t * (3.0 - 2.0 * t) / (PI * r2);
+}
+
 float disk_form_factor(vec3 x, vec3 n) {
     vec3 d = shooter_position - x;
     float r2 = dot(d, d);
@@ -159,23 +189,34 @@ void main() {
             vec3 x = corner[4 * p].xyz * (1.0 - s) * (1.0 - t) + corner[4 * p + 1].xyz * s * (1.0 - t)
                    + corner[4 * p + 2].xyz * s * t + corner[4 * p + 3].xyz * (1.0 - s) * t;
             vec3 n = normal_area[p].xyz;
-            float v = visibility(x, n, p);
+            // the sky's visibility is already in each element's sky fraction
+            float v = shooter_kind == 3 ? 1.0 : visibility(x, n, p);
 #if RECORD_VISIBILITY
             visibility_out[e] = v;
 #endif
             float f = 0.0;
             if (v > 0.0) {
+                if (shooter_kind == 1) {
+                    f = point_lamp_factor(x, n);
+                } else if (shooter_kind == 2) {
+                    f = max(-dot(n, light_direction), 0.0) / PI;
+                } else if (shooter_kind == 3) {
+                    f = sky_fraction[element];
+                } else {
 #if KERNEL_EXACT
-                f = polygon_form_factor(x, n);
+                    f = polygon_form_factor(x, n);
 #else
-                f = disk_form_factor(x, n);
+                    f = disk_form_factor(x, n);
 #endif
+                }
             }
             if (f > 0.0) {
                 vec3 rho = reflectance[p].rgb;
                 vec3 delta = rho * shooter_radiosity * f;
                 float weight = element_weight[element];
+#if INTERREFLECTION
                 imageStore(residual, residual_texel, imageLoad(residual, residual_texel) + vec4(weight * delta, 0.0));
+#endif
                 ivec2 origin = ivec2(p % padded_tiles_per_row, p / padded_tiles_per_row) * (ELEMENTS + 2 * GUTTER)
                              + ivec2(GUTTER);
                 vec4 value = imageLoad(radiosity, origin + ivec2(i, j)) + vec4(delta, 0.0);

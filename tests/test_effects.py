@@ -88,3 +88,24 @@ def test_black_patches_get_no_hemicube(ctx):
     analysed, full = solve_both(ctx, scene, subdiv=2, hemicube_res=64, tolerance=1e-7)
     assert analysed.report["effects"]["hemicubes"] == full.report["effects"]["hemicubes"] - 4
     np.testing.assert_allclose(analysed.patch_radiosity, full.patch_radiosity, rtol=1e-5, atol=1e-9)
+
+
+def test_progressive_occlusion_skip_matches_visibility_maps(ctx):
+    """Convex room lit by its ceiling: without visibility maps the same answer, and no maps drawn."""
+    scene = scene_from_dict(closed_cube(reflectance=0.6, emitting={"ceiling"}))
+    analysed, full = (solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3, skip_unneeded=skip), ctx=ctx)
+                      for skip in (True, False))
+    assert analysed.report["effects"]["visibility_maps"] == 0
+    assert full.report["effects"]["visibility_maps"] == full.report["shots"] > 0
+    # the search variant's lookups along the room's edges differ slightly from V = 1
+    np.testing.assert_allclose(analysed.element_radiosity, full.element_radiosity, rtol=0.01)
+
+
+def test_progressive_interreflection_skip_shoots_only_the_emitter(ctx):
+    scene = scene_from_dict(opposed_squares(1.0))
+    analysed, full = (solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-6, skip_unneeded=skip), ctx=ctx)
+                      for skip in (True, False))
+    assert analysed.report["shots"] == 4  # the emitter's four patches, once each
+    assert analysed.report["effects"]["residual_updates"] is False
+    assert full.report["shots"] > analysed.report["shots"]
+    np.testing.assert_allclose(analysed.element_radiosity, full.element_radiosity, rtol=1e-4, atol=1e-7)

@@ -1,7 +1,7 @@
 """Scene analysis: which effects a scene calls for, decided cheaply and conservatively
 before any GPU work, so a solve simulates only those (the report's `effects`).
 
-- channels: 1 when every reflectance and emission is grey (r = g = b), else 3;
+- channels: 1 when every reflectance and emission (and lamp and world colour) is grey, else 3;
 - occlusion: False when no surface can hide any part of another — every surface lies in
   the closed front half-space of every other one (the inside of a convex room, two
   facing panels), so segments between surfaces stay inside a convex region bounded by
@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .lights import scene_lamps, world_color
 from .scene import Scene
 
 PLANE_TOLERANCE = 1e-6  # relative to the scene diameter
@@ -56,13 +57,35 @@ def _front_heights(scene: Scene):
 
 
 def is_grey(scene: Scene) -> bool:
-    values = np.stack([np.concatenate([s.reflectance, s.emission]).reshape(2, 3) for s in scene.surfaces])
-    return bool(np.all(np.abs(values - values[..., :1]) <= 1e-12 * np.maximum(1.0, np.abs(values))))
+    colours = [s.reflectance for s in scene.surfaces] + [s.emission for s in scene.surfaces]
+    colours += [lamp.color for lamp in scene_lamps(scene)] + [world_color(scene)]
+    values = np.stack(colours)
+    return bool(np.all(np.abs(values - values[:, :1]) <= 1e-12 * np.maximum(1.0, np.abs(values))))
+
+
+def _inside_every_front(scene: Scene, points: np.ndarray) -> bool:
+    """Do `points` (N, 3) lie in the closed front half-space of every surface?"""
+    if len(points) == 0:
+        return True
+    normals = np.stack([s.normal for s in scene.surfaces])
+    anchors = np.stack([s.vertices[0] for s in scene.surfaces])
+    heights = np.einsum("snd,sd->sn", points[None, :, :] - anchors[:, None, :], normals)
+    return bool(np.all(heights >= -PLANE_TOLERANCE * scene.diameter))
 
 
 def can_occlude(scene: Scene) -> bool:
+    """Surfaces lying in front of every other surface's plane bound a convex region; lamps inside
+    it (point, spot, area corners) reach everything unblocked. A sun comes from outside: walls
+    of such a room do block it, so a sun always counts as possible occlusion."""
     tolerance = PLANE_TOLERANCE * scene.diameter
-    return any(np.any(heights < -tolerance) for _, heights in _front_heights(scene))
+    if any(np.any(heights < -tolerance) for _, heights in _front_heights(scene)):
+        return True
+    lamps = scene_lamps(scene)
+    if any(lamp.type == "sun" for lamp in lamps):
+        return True
+    points = [lamp.position[None] for lamp in lamps if lamp.position is not None]
+    points += [lamp.vertices for lamp in lamps if lamp.vertices is not None]
+    return not _inside_every_front(scene, np.concatenate(points) if points else np.zeros((0, 3)))
 
 
 def can_interreflect(scene: Scene) -> bool:
@@ -79,7 +102,9 @@ def can_interreflect(scene: Scene) -> bool:
 
 
 def emitter_count(scene: Scene) -> int:
-    return int(sum(bool(np.any(s.emission > 0)) for s in scene.surfaces))
+    """Emissive surfaces, lamps, and the world when it has a colour."""
+    surfaces = sum(bool(np.any(s.emission > 0)) for s in scene.surfaces)
+    return int(surfaces + len(scene_lamps(scene)) + bool(np.any(world_color(scene) > 0)))
 
 
 def analyse(scene: Scene) -> SceneEffects:

@@ -48,22 +48,23 @@ def fixed_point_weights(tile: np.ndarray) -> np.ndarray:
     return weights.astype(np.uint32)
 
 
-def patch_frames(patches: Patches) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Centre, tangent, bitangent, normal of every patch (orthonormal frames)."""
-    normal = patches.normal
-    edge = patches.corners[:, 1] - patches.corners[:, 0]
-    tangent = edge - (edge * normal).sum(axis=1, keepdims=True) * normal
+def frames(points: np.ndarray, normals: np.ndarray, edges: np.ndarray):
+    """Hemi-cube frames (centre, tangent, bitangent, normal) at points, the tangent along `edges`."""
+    tangent = edges - (edges * normals).sum(axis=1, keepdims=True) * normals
     tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
-    bitangent = np.cross(normal, tangent)
-    return patches.center, tangent, bitangent, normal
+    return points, tangent, np.cross(normals, tangent), normals
 
 
-def face_instances(patches: Patches, indices: np.ndarray, resolution: int,
-                   tiles_per_row: int, atlas_size: tuple[int, int]) -> np.ndarray:
+def patch_frames(patches: Patches):
+    """Centre, tangent, bitangent, normal of every patch (orthonormal frames)."""
+    return frames(patches.center, patches.normal, patches.corners[:, 1] - patches.corners[:, 0])
+
+
+def face_instances(hemicube_frames, resolution: int, tiles_per_row: int, atlas_size: tuple[int, int]) -> np.ndarray:
     """Per-instance rows (eye, right, up, forward, tile rect, up_min) for the 5 faces of the
-    hemi-cubes of patches `indices`, laid out like `delta_form_factors` inside each tile."""
-    count = len(indices)
-    centre, t, b, n = (v[indices] for v in patch_frames(patches))
+    hemi-cubes at `hemicube_frames`, laid out like `delta_form_factors` inside each tile."""
+    centre, t, b, n = hemicube_frames
+    count = len(centre)
     # (forward, right, up, row offset in tile, rows, up_min) for top, +t, -t, +b, -b
     faces = [
         (n, t, b, 0, resolution, -1.0),
@@ -157,17 +158,25 @@ class HemicubeRenderer:
         self.reduce = gl.compute(ctx, "hemicube_form_factor_rows.comp")
         weights = fixed_point_weights(delta_form_factors(resolution))
         self.weight_buffer = ctx.buffer(weights.tobytes())
-        self.row_buffer = ctx.buffer(reserve=self.slots * self.patch_count * 4)
+        self.row_length = self.patch_count + 1  # the last column: backs of patches
+        self.row_buffer = ctx.buffer(reserve=self.slots * self.row_length * 4)
+        self.program["back_item"] = self.row_length
         self.reduce["tile_size"] = (resolution, 3 * resolution)
         self.reduce["tiles_per_row"] = self.tiles_per_row
-        self.reduce["patch_count"] = self.patch_count
+        self.reduce["row_length"] = self.row_length
         self.reduce["item_buffer"] = 0
 
     def rows(self, indices: np.ndarray) -> np.ndarray:
         """Rows `indices` (at most `slots` of them) of F (float64, len(indices) x P)."""
+        return self.coverage(tuple(v[indices] for v in patch_frames(self.patches)))[:, :-1]
+
+    def coverage(self, hemicube_frames) -> np.ndarray:
+        """For hemi-cubes at `hemicube_frames` (at most `slots`): (count, P + 1) fractions of each
+        hemisphere (cosine-weighted) covered by each patch's front, then by backs of patches;
+        1 minus a row's sum is what sees the sky."""
         ctx = self.ctx
-        count = len(indices)
-        instances = face_instances(self.patches, indices, self.resolution, self.tiles_per_row, self.atlas_size)
+        count = len(hemicube_frames[0])
+        instances = face_instances(hemicube_frames, self.resolution, self.tiles_per_row, self.atlas_size)
         self.instance_buffer.write(instances.tobytes())
         self.framebuffer.use()
         self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
@@ -182,11 +191,11 @@ class HemicubeRenderer:
         ctx.memory_barrier()
         self.reduce.run(gl.groups(self.resolution, 16), gl.groups(3 * self.resolution, 16), count)
         ctx.memory_barrier()
-        sums = np.frombuffer(self.row_buffer.read(size=count * self.patch_count * 4), dtype=np.uint32)
-        return sums.reshape(count, self.patch_count).astype(np.float64) / FIXED_POINT_ONE
+        sums = np.frombuffer(self.row_buffer.read(size=count * self.row_length * 4), dtype=np.uint32)
+        return sums.reshape(count, self.row_length).astype(np.float64) / FIXED_POINT_ONE
 
     def item_image(self, slot: int = 0) -> np.ndarray:
-        """The item buffer of one tile (3R x R, patch id + 1, 0 = nothing): for tests and debugging."""
+        """The item buffer of one tile (3R x R: patch id + 1, P + 1 for a back, 0 = nothing)."""
         atlas = np.frombuffer(self.item_texture.read(), dtype=np.uint32).reshape(self.atlas_size[1], self.atlas_size[0])
         r = self.resolution
         x, y = (slot % self.tiles_per_row) * r, (slot // self.tiles_per_row) * 3 * r
@@ -220,3 +229,17 @@ def form_factor_matrix(ctx, patches: Patches, resolution: int, scene_diameter: f
     finally:
         renderer.release()
     return matrix
+
+
+def sky_fractions(ctx, patches: Patches, hemicube_frames, resolution: int, scene_diameter: float) -> np.ndarray:
+    """Cosine-weighted fraction of the hemisphere at each frame that sees no surface (front or back)."""
+    renderer = HemicubeRenderer(ctx, patches, resolution, scene_diameter)
+    try:
+        count = len(hemicube_frames[0])
+        fractions = np.empty(count)
+        for first in range(0, count, renderer.slots):
+            batch = tuple(v[first:first + renderer.slots] for v in hemicube_frames)
+            fractions[first:first + len(batch[0])] = 1.0 - renderer.coverage(batch).sum(axis=1)
+    finally:
+        renderer.release()
+    return np.clip(fractions, 0.0, 1.0)

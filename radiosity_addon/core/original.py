@@ -10,9 +10,11 @@ from __future__ import annotations
 import numpy as np
 
 from . import hemicube, linear_solvers
+from .direct_light import direct_light_on_patches, has_direct_light
 from .effects import SceneEffects
 from .form_factor_kernels import unoccluded_form_factor_matrix
 from .patches import Patches
+from .scene import Scene
 from .solution import SolveSettings, StageTimer
 
 
@@ -32,10 +34,18 @@ def as_rgb(radiosity: np.ndarray) -> np.ndarray:
     return np.repeat(radiosity, 3, axis=1) if radiosity.shape[1] == 1 else radiosity
 
 
-def solve_original(ctx, patches: Patches, scene_diameter: float, settings: SolveSettings,
+def solve_original(ctx, scene: Scene, patches: Patches, settings: SolveSettings,
                    effects: SceneEffects, timer: StageTimer, progress=None, should_cancel=None):
     """Patch radiosity (P x 3), the report entries of the original method, and F."""
     hemicube.check_memory(len(patches), settings.memory_limit_bytes)
+    scene_diameter = scene.diameter
+    emission = np.asarray(patches.emission, dtype=np.float64)
+    direct_work = {}
+    if has_direct_light(scene):  # lamps and sky: B = E + ρ H + ρ F B
+        with timer.stage("direct_light"):
+            reflected, direct_work = direct_light_on_patches(ctx, scene, patches, settings.visibility,
+                                                             settings.visibility_res, effects.occlusion)
+        emission = emission + reflected
     reflective = np.flatnonzero(patches.reflectance.max(axis=1) > 0)
     rows = reflective if settings.skip_unneeded else np.arange(len(patches))
     with timer.stage("form_factors"):
@@ -47,7 +57,7 @@ def solve_original(ctx, patches: Patches, scene_diameter: float, settings: Solve
             form_factors = unoccluded_form_factor_matrix(patches.center, patches.normal, patches.corners, rows)
             hemicubes = 0
     reflectance = solved_channels(patches.reflectance, effects.channels)
-    emission = solved_channels(patches.emission, effects.channels)
+    emission = solved_channels(emission, effects.channels)
     monitor = linear_solvers.Convergence(
         settings.solver, settings.effective_tolerance, settings.max_iterations,
         should_cancel, scaled(progress, 0.8, 1.0),
@@ -68,6 +78,6 @@ def solve_original(ctx, patches: Patches, scene_diameter: float, settings: Solve
                     " the solver reads back two floats every 16 Jacobi sweeps",
         "work": {"hemicubes": hemicubes, "form_factor_rows": int(len(rows)),
                  "channels_solved": effects.channels,
-                 "linear_solve": bool(effects.interreflection)},
+                 "linear_solve": bool(effects.interreflection), **direct_work},
     }
     return as_rgb(radiosity), details, form_factors

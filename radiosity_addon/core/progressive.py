@@ -18,6 +18,8 @@ import time
 
 import numpy as np
 
+from .direct_light import shoot_direct_light
+from .effects import SceneEffects
 from .element_textures import ElementTextures
 from .patches import Patches
 from .scene import Scene
@@ -82,9 +84,11 @@ def ambient_term(patches: Patches):
     return lambda unshot_power: np.asarray(unshot_power) * scale
 
 
-def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettings, timer: StageTimer,
-                      progress=None, should_cancel=None):
-    """(patch radiosity (P, 3), element radiosity (P, S, S, 3), report details)."""
+def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
+                      timer: StageTimer, progress=None, should_cancel=None):
+    """(patch radiosity (P, 3), element radiosity (P, S, S, 3), report details).
+    `effects` (the scene analysis) may switch off visibility maps (nothing occludes) and
+    residual updates (no interreflection: only emitters and lamps ever shoot)."""
     started = time.perf_counter()
     variant = settings.visibility
     resolution = settings.visibility_res
@@ -93,7 +97,6 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
 
     emitted = (patches.area[:, None] * patches.emission).sum(axis=0)
     ledger = EnergyLedger(emitted)
-    emitted_total = float(emitted.sum())
     ambient = ambient_term(patches)
     shooters = PatchShooters(patches)
     objects = []
@@ -108,8 +111,18 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
             visibility_map = VisibilityMap(ctx, patches, resolution, variant, scene.diameter)
             objects.append(visibility_map)
             gatherer = Gatherer(ctx, textures, buffers, settings.kernel, VARIANTS[variant].search_radius,
-                                occluder_margin=VARIANTS[variant].occluder_margin)
+                                occluder_margin=VARIANTS[variant].occluder_margin, occlusion=effects.occlusion,
+                                interreflection=effects.interreflection)
             objects.append(gatherer)
+        with timer.stage("direct_light"):
+            direct = shoot_direct_light(ctx, scene, patches, settings.elements, gatherer, visibility_map,
+                                        effects.occlusion)
+            textures.build_mipmaps()
+            first = selector.select()  # also drops the lamp shots' energy sums: they are booked here
+        # lamps and the sky enter the ledger as the power their first bounce adds to the unshot
+        lamp_first_bounce = np.maximum(first.unshot - emitted, 0.0)
+        ledger.emitted = ledger.emitted + lamp_first_bounce
+        emitted_total = float(ledger.emitted.sum())
 
         shots = 0
         history = []  # (elapsed, unshot fraction) for the estimate of time left
@@ -122,7 +135,7 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
                 selection = selector.select()
             ledger.settle(selection.last_shot)
             unshot_gpu = selection.unshot
-            fraction_left = float(unshot_gpu.sum()) / emitted_total
+            fraction_left = float(unshot_gpu.sum()) / emitted_total if emitted_total > 0 else 0.0
             elapsed = time.perf_counter() - started
             history.append((elapsed, fraction_left))
             if progress is not None:
@@ -132,7 +145,7 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
                          + (f", ~{eta:.0f} s left" if eta is not None else ""),
                          {"shots": shots, "elapsed": elapsed, "eta": eta, "unshot_fraction": fraction_left,
                           "ambient": ambient(unshot_gpu).tolist()})
-            if fraction_left <= tolerance or selection.patch < 0:
+            if fraction_left <= tolerance or selection.patch < 0 or emitted_total <= 0:
                 break
             if shots >= max_shots:
                 stop_reason = "max_shots"
@@ -140,8 +153,9 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
             shooter = shooters.shooter(selection.patch, selection.residual,
                                        selection.centroid if settings.shoot_from == "centroid" else None)
             ledger.pending = shooter.power
-            with timer.stage("visibility"):
-                visibility_map.render(shooter.position, shooter.axes, skip_patch=shooter.patch)
+            if effects.occlusion:
+                with timer.stage("visibility"):
+                    visibility_map.render(shooter.position, shooter.axes, skip_patch=shooter.patch)
             with timer.stage("shoot"):
                 gatherer.shoot(shooter, visibility_map)
             with timer.stage("mipmap"):
@@ -160,7 +174,7 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
     details = {
         "shots": shots,
         "stop_reason": stop_reason,
-        "unshot_fraction": float(unshot_gpu.sum()) / emitted_total,
+        "unshot_fraction": float(unshot_gpu.sum()) / emitted_total if emitted_total > 0 else 0.0,
         "energy": {**ledger.as_dict(), "unshot_gpu_sum": float(unshot_gpu.sum())},
         "readback_per_shot": READBACK,
         "visibility": {"variant": variant, "resolution": resolution,
@@ -170,8 +184,11 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
         "kernel": settings.kernel,
         "elements_per_patch": settings.elements,
         "shots_per_second": shots / solve_seconds if solve_seconds > 0 else None,
-        # what was actually run (the report's effects; progressive applies no scene-analysis skips yet)
-        "work": {"visibility_maps": shots, "channels_solved": 3, "occlusion_tested": True},
+        # what was actually run (the report's effects). Channels: the GPU shoots RGBA texels,
+        # so a grey scene costs the same; it is solved in three channels.
+        "work": {"visibility_maps": (shots if effects.occlusion else 0) + direct["lamp_visibility_maps"],
+                 "shots": shots, "channels_solved": 3, "residual_updates": bool(effects.interreflection),
+                 **direct},
     }
     return patch_radiosity, elements, details
 

@@ -191,21 +191,14 @@ def scene_from_dict(data: dict, require_emitter: bool = True) -> Scene:
     return scene
 
 
-def _world_emits(extras: dict) -> bool:
-    world = extras.get("world")
-    colour = world.get("color") if isinstance(world, dict) else None
-    try:
-        return colour is not None and bool(np.any(np.asarray(colour, dtype=np.float64) > 0))
-    except (TypeError, ValueError):
-        return False
-
-
 def check_has_emitter(scene: Scene) -> None:
-    if (not any(np.any(s.emission > 0) for s in scene.surfaces) and not scene.extras.get("lights")
-            and not _world_emits(scene.extras)):
+    """Refuse a scene with no emissive surface, no lamp that emits and no world colour."""
+    from .effects import emitter_count  # effects reads the lamps, which build on this module
+
+    if emitter_count(scene) == 0:
         raise SceneError(
             "scene: nothing emits light; give at least one surface a positive emission"
-            " (an emissive material) before baking"
+            " (an emissive material), a lamp or a world colour before baking"
         )
 
 

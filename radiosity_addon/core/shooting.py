@@ -32,8 +32,13 @@ class Shooter:
     axes: tuple  # (x, y, normal) orthonormal
     polygon: np.ndarray  # (4, 3) corners, counter-clockwise from the front
     area: float
-    radiosity: np.ndarray  # (3,) unshot radiosity being shot
+    radiosity: np.ndarray  # (3,) unshot radiosity being shot (a point lamp: intensity; a sun: irradiance)
     patch: int = -1  # the patch whose residual this shot clears
+    kind: int = 0  # 0: polygon, 1: point lamp, 2: directional (sun) — see shoot_to_elements.comp
+    light_direction: tuple = (0.0, 0.0, -1.0)  # spot axis / sun travel direction
+    spot_cos_half: float = -1.0  # -1: no cone
+    spot_smooth: float = 0.0
+    ortho_extent: float = 0.0  # > 0: orthographic visibility map (sun)
 
     @property
     def power(self) -> np.ndarray:
@@ -137,7 +142,8 @@ class Gatherer:
     """The shooting pass over all receiving elements."""
 
     def __init__(self, ctx, textures: ElementTextures, buffers: PatchBuffers, kernel: str, search_radius: int,
-                 record_visibility: bool = False, occluder_margin: float = -1.0):
+                 record_visibility: bool = False, occluder_margin: float = -1.0, occlusion: bool = True,
+                 interreflection: bool = True):
         if kernel not in ("exact", "disk"):
             raise ValueError(f"unknown kernel '{kernel}' (choose exact, disk)")
         self.ctx, self.textures, self.buffers = ctx, textures, buffers
@@ -145,15 +151,16 @@ class Gatherer:
         self.program = gl.compute(ctx, "shoot_to_elements.comp", defines={
             "ELEMENTS": layout.elements, "GUTTER": layout.gutter, "KERNEL_EXACT": int(kernel == "exact"),
             "SEARCH_RADIUS": search_radius, "RECORD_VISIBILITY": int(record_visibility),
-            "OCCLUDER_MARGIN": float(occluder_margin),
+            "OCCLUDER_MARGIN": float(occluder_margin), "OCCLUSION": int(occlusion),
+            "INTERREFLECTION": int(interreflection),
         })
         self.element_count = layout.patch_count * layout.elements ** 2
         self.program["patch_count"] = layout.patch_count
         self.program["padded_tiles_per_row"] = layout.padded_tiles_per_row
         self.program["residual_tiles_per_row"] = layout.residual_tiles_per_row
-        self.program["item_buffer"] = 0
-        if self.program.get("distance_map", None) is not None:
-            self.program["distance_map"] = 1
+        for sampler, unit in (("item_buffer", 0), ("distance_map", 1)):
+            if self.program.get(sampler, None) is not None:  # unused without occlusion
+                self.program[sampler] = unit
         self.visibility = ctx.buffer(reserve=4 * self.element_count) if record_visibility else None
 
     def shoot(self, shooter: Shooter, visibility_map: VisibilityMap) -> None:
@@ -168,6 +175,11 @@ class Gatherer:
             "shooter_polygon": [vector(c) for c in shooter.polygon],
             "shooter_area": float(shooter.area),
             "shooter_radiosity": vector(shooter.radiosity),
+            "shooter_kind": shooter.kind,
+            "light_direction": vector(shooter.light_direction),
+            "spot_cos_half": float(shooter.spot_cos_half),
+            "spot_smooth": float(shooter.spot_smooth),
+            "ortho_extent": float(shooter.ortho_extent),
         }
         for name, value in uniforms.items():
             if self.program.get(name, None) is not None:  # a kernel may not use every uniform
@@ -184,6 +196,17 @@ class Gatherer:
         rows = -(-groups // MAX_GROUPS)
         self.program.run(-(-groups // rows), rows)
         self.ctx.memory_barrier()
+
+    def shoot_sky(self, color: np.ndarray, sky_fraction: np.ndarray, visibility_map: VisibilityMap) -> None:
+        """Every element gathers ρ · color · its sky fraction ((P, S, S) array)."""
+        fractions = self.ctx.buffer(np.ascontiguousarray(sky_fraction, dtype=np.float32).tobytes())
+        try:
+            fractions.bind_to_storage_buffer(8)
+            self.shoot(Shooter(position=np.zeros(3), axes=(np.eye(3)[0], np.eye(3)[1], np.eye(3)[2]),
+                               polygon=np.zeros((4, 3)), area=0.0, radiosity=np.asarray(color), kind=3),
+                       visibility_map)
+        finally:
+            fractions.release()
 
     def recorded_visibility(self) -> np.ndarray:
         """(P * S * S,) visibility of each element in the last shot (only with record_visibility)."""

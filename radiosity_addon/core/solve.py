@@ -36,13 +36,13 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, sh
         if settings.method == "hemicube":
             from .original import solve_original
 
-            radiosity, details, _ = solve_original(gl_ctx, patches, scene.diameter, settings, effects,
+            radiosity, details, _ = solve_original(gl_ctx, scene, patches, settings, effects,
                                                    timer, progress, should_cancel)
             elements = None
         else:
             from .progressive import solve_progressive
 
-            radiosity, elements, details = solve_progressive(gl_ctx, scene, patches, settings, timer,
+            radiosity, elements, details = solve_progressive(gl_ctx, scene, patches, settings, effects, timer,
                                                              progress, should_cancel)
     timer.timings["total"] = time.perf_counter() - started
 

@@ -111,9 +111,11 @@ class VisibilityMap:
                 error = failure
         raise error
 
-    def render(self, eye, axes, skip_patch: int = -1) -> None:
-        """Draw the item buffer from `eye`, axes = (x, y, pole); `skip_patch` is left out."""
+    def render(self, eye, axes, skip_patch: int = -1, ortho_extent: float = 0.0) -> None:
+        """Draw the item buffer from `eye`, axes = (x, y, pole); `skip_patch` is left out.
+        With `ortho_extent` > 0 the projection is orthographic along the pole (a sun)."""
         ctx = self.ctx
+        self.program["ortho_extent"] = float(ortho_extent)
         self.program["eye"] = tuple(map(float, eye))
         for name, axis in zip(("axis_x", "axis_y", "axis_z"), axes):
             self.program[name] = tuple(map(float, axis))
