@@ -9,7 +9,7 @@ units of the radiosity B:
 - sun of `strength` S: irradiance color · S · cosθ, a receiver gets ρ · color · S · cosθ / π;
   shot from far away along its direction with an orthographic visibility map;
 - area lamp of `power` P over area A: a one-sided emitting polygon of radiance color · P / (π A),
-  shot with the exact polygon kernel (it casts no shadow of its own, as in Cycles);
+  shot in pieces with the exact polygon kernel (it casts no shadow of its own, as in Cycles);
 - world colour L: a receiver gets ρ · L · (cosine-weighted fraction of its hemisphere that sees
   no surface), measured with hemi-cubes (see `sky.py`).
 
@@ -24,11 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .patches import bilinear
 from .scene import Scene, SceneError, polygon_area_vector
 from .shooting import Shooter
 from .visibility import frame_from_normal
 
 LAMP_TYPES = ("point", "spot", "sun", "area")
+AREA_LAMP_PIECE = 1 / 32  # longest side of an area lamp's pieces, as a fraction of the scene's size
+AREA_LAMP_MAX_SPLIT = 8  # pieces per side at most
 
 
 @dataclass(frozen=True)
@@ -162,9 +165,18 @@ def lamp_shooters(lamp: Lamp, scene_centre: np.ndarray, scene_diameter: float) -
         return [Shooter(position=eye, axes=(*frame_from_normal(lamp.direction), lamp.direction),
                         polygon=np.zeros((4, 3)), area=0.0, radiosity=lamp.color * lamp.strength, kind=2,
                         light_direction=tuple(lamp.direction), ortho_extent=scene_diameter / 2)]
+    # An area lamp is split into sub-lamps, each with its own visibility map, so shadows keep
+    # their penumbra (one map from the centre turns a nearby object's penumbra into umbra).
     normal = polygon_area_vector(lamp.vertices)
-    area = float(np.linalg.norm(normal))
-    normal = normal / area
-    return [Shooter(position=lamp.vertices.mean(axis=0),
-                    axes=(*frame_from_normal(normal, lamp.vertices[1] - lamp.vertices[0]), normal),
-                    polygon=lamp.vertices, area=area, radiosity=lamp.area_radiance, kind=0)]
+    normal = normal / np.linalg.norm(normal)
+    sides = np.linalg.norm(np.roll(lamp.vertices, -1, axis=0) - lamp.vertices, axis=1)
+    split = int(np.clip(np.ceil(sides.max() / (scene_diameter * AREA_LAMP_PIECE)), 1, AREA_LAMP_MAX_SPLIT))
+    grid = np.arange(split + 1) / split
+    s0, t0 = np.meshgrid(grid[:-1], grid[:-1])
+    offsets = np.array([[0, 0], [1, 0], [1, 1], [0, 1]]) / split
+    corners = bilinear(lamp.vertices[None], s0.ravel()[:, None] + offsets[:, 0], t0.ravel()[:, None] + offsets[:, 1])[0]
+    radiance = lamp.area_radiance
+    x_axis = frame_from_normal(normal, lamp.vertices[1] - lamp.vertices[0])
+    return [Shooter(position=piece.mean(axis=0), axes=(*x_axis, normal), polygon=piece,
+                    area=float(np.linalg.norm(polygon_area_vector(piece))), radiosity=radiance, kind=0)
+            for piece in corners]
