@@ -42,6 +42,8 @@ def add_solver_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--kernel", choices=("exact", "disk"), default=defaults.kernel,
                        help="progressive form-factor kernel: exact point-to-polygon (default) or the disk"
                             " approximation")
+    group.add_argument("--no-skips", dest="skip_unneeded", action="store_false",
+                       help="simulate every effect even when the scene analysis shows it is absent")
 
 
 def settings_from_args(args) -> SolveSettings:
@@ -49,6 +51,7 @@ def settings_from_args(args) -> SolveSettings:
         method=args.method, subdiv=args.subdiv, elements=args.elements, hemicube_res=args.hemicube_res,
         solver=args.solver, tolerance=args.tolerance, max_iterations=args.max_iterations,
         max_shots=args.max_shots, visibility=args.visibility, kernel=args.kernel,
+        skip_unneeded=args.skip_unneeded,
     )
 
 

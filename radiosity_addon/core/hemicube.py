@@ -58,11 +58,12 @@ def patch_frames(patches: Patches) -> tuple[np.ndarray, np.ndarray, np.ndarray, 
     return patches.center, tangent, bitangent, normal
 
 
-def face_instances(patches: Patches, first: int, count: int, resolution: int,
+def face_instances(patches: Patches, indices: np.ndarray, resolution: int,
                    tiles_per_row: int, atlas_size: tuple[int, int]) -> np.ndarray:
-    """Per-instance rows (eye, right, up, forward, tile rect, up_min) for 5 faces of patches
-    first..first+count, laid out like `delta_form_factors` inside each tile."""
-    centre, t, b, n = (v[first:first + count] for v in patch_frames(patches))
+    """Per-instance rows (eye, right, up, forward, tile rect, up_min) for the 5 faces of the
+    hemi-cubes of patches `indices`, laid out like `delta_form_factors` inside each tile."""
+    count = len(indices)
+    centre, t, b, n = (v[indices] for v in patch_frames(patches))
     # (forward, right, up, row offset in tile, rows, up_min) for top, +t, -t, +b, -b
     faces = [
         (n, t, b, 0, resolution, -1.0),
@@ -119,7 +120,7 @@ def check_memory(patch_count: int, limit_bytes: int) -> None:
 
 
 class HemicubeRenderer:
-    """GPU objects for one scene and resolution; `rows(first, count)` gives F rows."""
+    """GPU objects for one scene and resolution; `rows(indices)` gives those rows of F."""
 
     def __init__(self, ctx, patches: Patches, resolution: int, scene_diameter: float):
         self.ctx = ctx
@@ -162,10 +163,11 @@ class HemicubeRenderer:
         self.reduce["patch_count"] = self.patch_count
         self.reduce["item_buffer"] = 0
 
-    def rows(self, first: int, count: int) -> np.ndarray:
-        """Rows first..first+count of F (float64, count x P)."""
+    def rows(self, indices: np.ndarray) -> np.ndarray:
+        """Rows `indices` (at most `slots` of them) of F (float64, len(indices) x P)."""
         ctx = self.ctx
-        instances = face_instances(self.patches, first, count, self.resolution, self.tiles_per_row, self.atlas_size)
+        count = len(indices)
+        instances = face_instances(self.patches, indices, self.resolution, self.tiles_per_row, self.atlas_size)
         self.instance_buffer.write(instances.tobytes())
         self.framebuffer.use()
         self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
@@ -197,20 +199,24 @@ class HemicubeRenderer:
 
 
 def form_factor_matrix(ctx, patches: Patches, resolution: int, scene_diameter: float,
-                       progress=None, should_cancel=None) -> np.ndarray:
-    """F (P x P, float32): F[i, j] = fraction of patch i's hemisphere covered by patch j."""
+                       progress=None, should_cancel=None, rows: np.ndarray | None = None) -> np.ndarray:
+    """F (P x P, float32): F[i, j] = fraction of patch i's hemisphere covered by patch j.
+    Only the hemi-cubes of `rows` (default: all patches) are rendered; other rows stay 0."""
     count = len(patches)
+    rows = np.arange(count) if rows is None else np.asarray(rows)
     matrix = np.zeros((count, count), dtype=np.float32)
+    if len(rows) == 0:
+        return matrix
     renderer = HemicubeRenderer(ctx, patches, resolution, scene_diameter)
     try:
-        for first in range(0, count, renderer.slots):
+        for first in range(0, len(rows), renderer.slots):
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
-            batch = min(renderer.slots, count - first)
-            matrix[first:first + batch] = renderer.rows(first, batch)
+            batch = rows[first:first + renderer.slots]
+            matrix[batch] = renderer.rows(batch)
             if progress is not None:
-                done = first + batch
-                progress(done / count, f"hemi-cubes {done}/{count}", {"hemicubes": done})
+                done = first + len(batch)
+                progress(done / len(rows), f"hemi-cubes {done}/{len(rows)}", {"hemicubes": done})
     finally:
         renderer.release()
     return matrix

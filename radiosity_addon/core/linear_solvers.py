@@ -29,6 +29,7 @@ class Convergence:
         self.best = np.inf
         self.checks_since_best = 0
         self.first = None
+        self.smallest_change = np.inf
         self.relative_change = np.inf
         self.iterations = 0
 
@@ -45,8 +46,14 @@ class Convergence:
             return True
         if self.should_cancel is not None and self.should_cancel():
             raise SolveCancelled("cancelled")
-        if relative > 1e3 * max(self.first, self.tolerance):
-            raise SolveError(f"{self.name} diverged (relative change {relative:.3g} after {iterations} iterations)")
+        # a converging iteration shrinks its change geometrically; growth means divergence
+        # (spectral radius of diag(rho) F above 1: unphysical reflectance or form factors)
+        self.smallest_change = min(self.smallest_change, max_change)
+        if relative > 1e3 * max(self.first, self.tolerance) or max_change > 10 * self.smallest_change > 0:
+            raise SolveError(
+                f"{self.name} diverged (the change grew to {max_change:.3g} after {iterations} iterations);"
+                " check that reflectances are below 1"
+            )
         if relative < 0.99 * self.best:
             self.best, self.checks_since_best = relative, 0
         else:

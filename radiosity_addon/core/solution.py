@@ -36,6 +36,7 @@ class SolveSettings:
     visibility: str = "search"  # progressive: plain | tessellated | search
     kernel: str = "exact"  # progressive: exact | disk
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
+    skip_unneeded: bool = True  # simulate only the effects the scene calls for (core/effects.py)
 
     @property
     def effective_tolerance(self) -> float:

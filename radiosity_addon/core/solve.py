@@ -6,11 +6,13 @@ get the same settings checks, emitter check, timings and report.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
 
-from . import effects, gl
+from . import gl
+from .effects import effects_for
 from .patches import subdivide
 from .scene import Scene, check_has_emitter
 from .solution import Solution, SolveError, SolveSettings, StageTimer
@@ -26,14 +28,16 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, sh
     check_has_emitter(scene)
     started = time.perf_counter()
     timer = StageTimer()
+    with timer.stage("analyse"):
+        effects = effects_for(scene, settings.skip_unneeded)
     with timer.stage("subdivide"):
         patches = subdivide(scene, settings.subdiv)
     with gl.gl_context(ctx) as gl_ctx:
         if settings.method == "hemicube":
             from .original import solve_original
 
-            radiosity, details, _ = solve_original(gl_ctx, patches, scene.diameter, settings, timer,
-                                                   progress, should_cancel)
+            radiosity, details, _ = solve_original(gl_ctx, patches, scene.diameter, settings, effects,
+                                                   timer, progress, should_cancel)
             elements = None
         else:
             try:
@@ -44,6 +48,7 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, sh
                                                              progress, should_cancel)
     timer.timings["total"] = time.perf_counter() - started
 
+    work = details.pop("work", {})
     element_count = len(patches) * (settings.elements ** 2 if elements is not None else 1)
     report = {
         "method": settings.method,
@@ -52,7 +57,7 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, sh
                    "patches": len(patches), "elements": element_count},
         "timings": timer.timings,
         **details,
-        "effects": effects.simulated(scene, patches, settings),
+        "effects": {**dataclasses.asdict(effects), **work},
         "radiosity_max": float(np.max(radiosity)),
     }
     return Solution(patches=patches, patch_radiosity=np.asarray(radiosity, dtype=np.float64),

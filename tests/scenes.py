@@ -1,0 +1,70 @@
+"""Small analytic scenes for tests (scene dicts in the JSON format of DESIGN.md)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Faces of the unit cube, counter-clockwise seen from outside; `closed_cube` reverses
+# them so the fronts look inward.
+CUBE_FACES = {
+    "floor": [[0, 0, 0], [0, 1, 0], [1, 1, 0], [1, 0, 0]],
+    "ceiling": [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
+    "wall_y0": [[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]],
+    "wall_y1": [[0, 1, 0], [0, 1, 1], [1, 1, 1], [1, 1, 0]],
+    "wall_x0": [[0, 0, 0], [0, 0, 1], [0, 1, 1], [0, 1, 0]],
+    "wall_x1": [[1, 0, 0], [1, 1, 0], [1, 1, 1], [1, 0, 1]],
+}
+
+
+def surface(name, vertices, reflectance, emission, obj=None):
+    grey = lambda v: [float(v)] * 3 if np.isscalar(v) else [float(x) for x in v]  # noqa: E731
+    entry = {"name": name, "vertices": [list(map(float, p)) for p in vertices],
+             "reflectance": grey(reflectance), "emission": grey(emission)}
+    if obj:
+        entry["object"] = obj
+    return entry
+
+
+def closed_cube(reflectance=0.5, emission=1.0, emitting=None, scale=1.0):
+    """Unit cube (times `scale`); every face emits `emission` unless `emitting` names the faces that do."""
+    return {"surfaces": [
+        surface(name, np.asarray(v, float)[::-1] * scale, reflectance,
+                emission if emitting is None or name in emitting else 0.0)
+        for name, v in CUBE_FACES.items()
+    ]}
+
+
+def opposed_squares(distance, receiver_reflectance=0.5, emitter_emission=1.0):
+    """Unit square receiver at z=0 facing +z, unit square emitter at z=distance facing -z."""
+    square = [[0, 0], [1, 0], [1, 1], [0, 1]]
+    receiver = [[x, y, 0.0] for x, y in square]
+    emitter = [[x, y, distance] for x, y in square][::-1]
+    return {"surfaces": [surface("receiver", receiver, receiver_reflectance, 0.0),
+                         surface("emitter", emitter, 0.0, emitter_emission)]}
+
+
+def perpendicular_squares(receiver_reflectance=0.5, emitter_emission=1.0):
+    """Unit squares sharing the edge y=0..1 at x=0: receiver on z=0 (x>0) facing +z,
+    emitter on x=0 (z>0) facing +x."""
+    receiver = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    emitter = [[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1]]
+    return {"surfaces": [surface("receiver", receiver, receiver_reflectance, 0.0),
+                         surface("emitter", emitter, 0.0, emitter_emission)]}
+
+
+def opposed_rectangles_form_factor(a, b, c):
+    """Exact F between opposed equal a x b rectangles at distance c (DESIGN.md)."""
+    x, y = a / c, b / c
+    return 2 / (np.pi * x * y) * (
+        np.log(np.sqrt((1 + x * x) * (1 + y * y) / (1 + x * x + y * y)))
+        + x * np.sqrt(1 + y * y) * np.arctan(x / np.sqrt(1 + y * y))
+        + y * np.sqrt(1 + x * x) * np.arctan(y / np.sqrt(1 + x * x))
+        - x * np.arctan(x) - y * np.arctan(y)
+    )
+
+
+def area_weighted_mean(solution, surface_index):
+    patches = solution.patches
+    mask = patches.surface == surface_index
+    area = patches.area[mask]
+    return (solution.patch_radiosity[mask] * area[:, None]).sum(axis=0) / area.sum()
