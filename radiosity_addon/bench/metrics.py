@@ -33,6 +33,20 @@ def relative_rms(values: np.ndarray, reference: np.ndarray, weights: np.ndarray)
     return float(np.sqrt((w * (values - reference) ** 2).sum() / (w * reference**2).sum()))
 
 
+def footprint_rms(values: np.ndarray, reference: np.ndarray, weights: np.ndarray, owners: np.ndarray) -> float:
+    """Relative RMS of footprint means: both answers averaged over the covered texels of each
+    patch (`owners`: patch index per texel). Leaves out the piecewise-constant display error, so
+    it measures the solve (form factors, solver, visibility) alone."""
+    covered = weights > 0
+    flat_owners, flat_weights = owners[covered], weights[covered]
+    count = flat_owners.max() + 1
+    area = np.bincount(flat_owners, flat_weights, minlength=count)
+    used = area > 0
+    means = [np.stack([np.bincount(flat_owners, flat_weights * texels[covered][:, c], minlength=count)[used]
+                       / area[used] for c in range(3)], axis=1) for texels in (values, reference)]
+    return relative_rms(means[0], means[1], area[used])
+
+
 def object_means(scene: Scene, values: np.ndarray, weights: np.ndarray) -> dict[str, np.ndarray]:
     """Area-weighted mean RGB per object over the weighted texels (objects with any weight)."""
     means = {}

@@ -12,7 +12,7 @@ from ..core.solution import SolveError, SolveSettings
 from ..core.solve import solve
 from . import metrics, reference
 from .scenes import ANALYTIC_SCENES
-from .texels import solution_texels, texel_weights
+from .texels import solution_texels, texel_patches, texel_weights
 
 
 @dataclass(frozen=True)
@@ -82,8 +82,10 @@ def solve_row(evaluation: Evaluation, settings: SolveSettings, ctx) -> dict:
         evaluation.scene, solution.patches, solution.patch_radiosity, solution.element_radiosity,
         evaluation.resolution))
     report = solution.report
+    owners = texel_patches(evaluation.scene, solution.patches, evaluation.resolution)
+    footprint = metrics.footprint_rms(texels, evaluation.reference, evaluation.weights, owners)
     return {"scene": evaluation.name, "method": settings.method, "settings": compact_settings(settings),
-            "seconds": report["timings"]["total"], **evaluation.errors(texels),
+            "seconds": report["timings"]["total"], **evaluation.errors(texels), "patch_error": footprint,
             "timings": report["timings"], "counts": report["counts"],
             "iterations": report.get("iterations", report.get("shots"))}
 
@@ -96,7 +98,7 @@ def cycles_row(evaluation: Evaluation, samples: int) -> dict:
             "counts": {"texels": int((evaluation.weights > 0).sum())}}
 
 
-KNOBS = {"hemicube": ("subdiv", "hemicube_res", "solver", "tolerance"),
+KNOBS = {"hemicube": ("subdiv", "hemicube_res", "solver", "tolerance", "skip_unneeded"),
          "progressive": ("subdiv", "elements", "tolerance", "visibility", "kernel")}
 
 
@@ -112,8 +114,10 @@ def sweep_scene(name: str, scene: Scene, plan: SweepPlan, ctx, cache_dir, log=pr
     notes = {"reference": evaluation.reference_description, "noise_floor": evaluation.noise_floor,
              "texels_per_surface_side": plan.texel_resolution, "skipped": []}
     families = [("hemicube", plan.hemicube), ("progressive", plan.progressive)]
-    if name in ANALYTIC_SCENES:
-        families = [(method, tuple(replace(settings[0], subdiv=n) for n in plan.analytic_subdivisions))
+    if name in ANALYTIC_SCENES:  # subdivision only; the hemi-cube also without the analytic shortcuts
+        families = [(method, tuple(replace(settings[0], subdiv=n, skip_unneeded=skip)
+                                   for skip in ((True, False) if method == "hemicube" else (True,))
+                                   for n in plan.analytic_subdivisions))
                     for method, settings in families]
     rows = []
     for method, settings_list in families:

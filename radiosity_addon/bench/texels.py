@@ -97,3 +97,14 @@ def solution_texels(scene: Scene, patches: Patches, patch_radiosity: np.ndarray,
             values = element_radiosity[patch, element_t, element_s]
         texels[index] = values.mean(axis=2)
     return texels
+
+
+def texel_patches(scene: Scene, patches: Patches, resolution: int) -> np.ndarray:
+    """(surfaces, R, R) index of the patch holding each texel's centre (meaningful on covered texels)."""
+    lookup = _patch_lookup(patches, len(scene.surfaces))
+    s, t = sample_parameters(resolution, supersamples=1)
+    owners = np.zeros((len(scene.surfaces), resolution, resolution), dtype=np.int64)
+    for index, surface in enumerate(scene.surfaces):
+        row, column, _, _ = _locate(surface.is_triangle, patches.subdiv, s[..., 0], t[..., 0])
+        owners[index] = lookup[index, row, column]
+    return owners
