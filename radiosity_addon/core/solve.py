@@ -15,7 +15,7 @@ from . import gl
 from .effects import effects_for
 from .patches import subdivide
 from .scene import Scene, check_has_emitter
-from .solution import Solution, SolveError, SolveSettings, StageTimer
+from .solution import Solution, SolveSettings, StageTimer
 
 
 def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, should_cancel=None,
@@ -40,10 +40,8 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, sh
                                                    timer, progress, should_cancel)
             elements = None
         else:
-            try:
-                from .progressive import solve_progressive
-            except ImportError:
-                raise SolveError("the progressive method is not available yet; use --method hemicube") from None
+            from .progressive import solve_progressive
+
             radiosity, elements, details = solve_progressive(gl_ctx, scene, patches, settings, timer,
                                                              progress, should_cancel)
     timer.timings["total"] = time.perf_counter() - started

@@ -1,0 +1,72 @@
+#version 430
+// Tessellates one patch (its four corners arrive as a lines_adjacency
+// primitive; triangles repeat their last corner) into TESSELLATION x
+// TESSELLATION quads written as triangle strips (dissertation Algorithm 7),
+// and projects every vertex hemispherically from the eye:
+//   (x/|p|, y/|p|, depth linear in |p|), x, y, z in the eye's frame.
+// A straight-edged triangle only approximates the curved image of a patch
+// edge; tessellating makes the approximation close. TESSELLATION = 1 is the
+// plain projection of Coombe et al. Fewer segments are used for patches that
+// look small from the eye (SEGMENT_ANGLE radians each at most).
+// Rows of the grid are shared among INVOCATIONS geometry shader invocations
+// so that the output of each stays within portable limits.
+layout(lines_adjacency, invocations = INVOCATIONS) in;
+layout(triangle_strip, max_vertices = MAX_VERTICES) out;
+
+in vec3 v_position[];
+flat in uint v_patch[];
+
+uniform vec3 eye;
+uniform vec3 axis_x;
+uniform vec3 axis_y;
+uniform vec3 axis_z;      // the hemisphere's pole (the shooter's normal)
+uniform float near;
+uniform float far;
+uniform int skip_patch;   // the shooter itself is not drawn (-1: draw all)
+
+flat out uint item;
+out float gl_ClipDistance[1];
+
+vec3 corner(float s, float t) {
+    return v_position[0] * (1.0 - s) * (1.0 - t) + v_position[1] * s * (1.0 - t)
+         + v_position[2] * s * t + v_position[3] * (1.0 - s) * t;
+}
+
+void emit(vec3 position, uint id) {
+    vec3 d = position - eye;
+    vec3 q = vec3(dot(d, axis_x), dot(d, axis_y), dot(d, axis_z));
+    float distance = max(length(q), 1e-20);
+    gl_Position = vec4(q.xy / distance, 2.0 * (distance - near) / (far - near) - 1.0, 1.0);
+    gl_ClipDistance[0] = q.z;  // the front hemisphere only
+    item = id;
+    EmitVertex();
+}
+
+void main() {
+    if (int(v_patch[0]) == skip_patch) {
+        return;
+    }
+    vec3 normal = cross(v_position[2] - v_position[0], v_position[3] - v_position[1]);
+    // Backs of patches occlude but receive nothing: item 0 means "no patch".
+    uint id = dot(eye - v_position[0], normal) > 0.0 ? v_patch[0] + 1u : 0u;
+    // Adaptive: as many segments per side as the patch's angular size needs
+    // (a chord of SEGMENT_ANGLE radians strays ~angle^2/8 from the curved image).
+    float extent = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        vec3 a = normalize(v_position[k] - eye);
+        for (int m = k + 1; m < 4; ++m) {
+            extent = max(extent, acos(clamp(dot(a, normalize(v_position[m] - eye)), -1.0, 1.0)));
+        }
+    }
+    int n = clamp(int(ceil(extent / SEGMENT_ANGLE)), 1, TESSELLATION);
+    for (int j = gl_InvocationID; j < n; j += INVOCATIONS) {
+        float t0 = float(j) / float(n);
+        float t1 = float(j + 1) / float(n);
+        for (int i = 0; i <= n; ++i) {
+            float s = float(i) / float(n);
+            emit(corner(s, t0), id);
+            emit(corner(s, t1), id);
+        }
+        EndPrimitive();
+    }
+}
