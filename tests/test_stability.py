@@ -218,3 +218,62 @@ def test_long_thin_sliver_has_no_spikes(ctx):
     ours = solution.patch_radiosity[receiving, 0]
     reference = centre_point_reference(solution, 1, scene)[receiving]
     assert np.abs(ours - reference).max() < 0.03 * reference.max()  # measured 0.8 %
+
+
+# --- the progressive method ----------------------------------------------------------------------
+
+def progressive(**overrides) -> SolveSettings:
+    settings = dict(method="progressive", subdiv=1, elements=2)
+    return SolveSettings(**(settings | overrides))
+
+
+def test_progressive_closed_box_high_reflectance_stops_at_budget_from_below(ctx):
+    """ρ = 0.99 needs ~100× the emitted power shot; at a shot budget the answer must be below the
+    exact one by what is still unshot (never above, never NaN), and the float64 ledger must balance."""
+    reflectance = 0.99
+    scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
+    solution = solve(scene, progressive(max_shots=240), ctx=ctx)
+    assert solution.report["stop_reason"] == "max_shots"
+    assert_physical(solution)
+    exact = 1.0 / (1 - reflectance)
+    radiosity = solution.patch_radiosity
+    assert np.all(radiosity <= exact * 1.001)
+    energy = solution.report["energy"]
+    assert abs(energy["emitted"] - energy["absorbed"] - energy["escaped"] - energy["unshot"]) < 1e-9 * energy["emitted"]
+    assert energy["escaped"] < 0.01 * energy["emitted"]  # a closed box: (almost) nothing escapes
+    # in a uniform closed box, unshot radiosity U/A still adds ρ/(1 − ρ) U/A everywhere
+    unshot_radiosity = energy["unshot"] / 3 / solution.patches.area.sum()
+    completed = radiosity.mean() + unshot_radiosity * reflectance / (1 - reflectance)
+    assert completed == pytest.approx(exact, rel=0.01)  # measured 5e-6
+
+
+@pytest.fixture(scope="module")
+def cornell_progressive_baseline(ctx, cornell_dict):
+    return solve(scene_from_dict(cornell_dict), progressive(subdiv=2, tolerance=1e-2), ctx=ctx)
+
+
+@pytest.mark.parametrize("length, emission", [(1e-4, 1.0), (1e4, 1.0), (1.0, 1e6)])
+def test_progressive_is_scale_and_emission_invariant(ctx, cornell_dict, cornell_progressive_baseline,
+                                                     length, emission):
+    scene = scene_from_dict(scaled_scene(cornell_dict, length, emission))
+    solution = solve(scene, progressive(subdiv=2, tolerance=1e-2), ctx=ctx)
+    assert_physical(solution)
+    expected = cornell_progressive_baseline.element_radiosity
+    ours = solution.element_radiosity / emission
+    assert np.all(np.isfinite(ours))
+    reflecting = solution.patches.emission.max(axis=1) == 0
+    difference = np.abs(ours - expected)[reflecting]
+    assert difference.max() < 0.01 * expected[reflecting].max()
+
+
+def test_progressive_touching_patches_have_no_spikes(ctx):
+    scene = scene_from_dict(perpendicular_squares(receiver_reflectance=0.5, emitter_emission=1.0))
+    solution = solve(scene, progressive(subdiv=4, elements=4, tolerance=1e-3), ctx=ctx)
+    assert_physical(solution)
+    elements = solution.element_radiosity[solution.patches.surface == 0]
+    assert np.all(np.isfinite(elements)) and np.all(elements >= 0)
+    assert elements.max() <= 0.5 * 0.5 * 1.01  # ρ E F with F ≤ 1/2 at the shared edge
+    receiver = solution.patches.surface == 0
+    area = solution.patches.area[receiver]
+    mean = (solution.patch_radiosity[receiver, 0] * area).sum() / area.sum()
+    assert mean == pytest.approx(0.5 * 0.200044, rel=0.05)

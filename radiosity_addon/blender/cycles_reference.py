@@ -14,6 +14,9 @@ Only this module imports bpy; the benchmark calls `bake_scene` and gets numpy ba
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 import time
 
 import numpy as np
@@ -111,6 +114,20 @@ def _configure_cycles(bpy, samples: int, seed: int, threads: int | None):
     bake.margin = 0
 
 
+@contextlib.contextmanager
+def quiet_stdout():
+    """Blender prints one "Info: Baking map saved ..." line per image to the C stdout: silence it."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "w") as devnull:
+            os.dup2(devnull.fileno(), 1)
+            yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def bake_scene(scene, resolution: int, samples: int, seed: int = 0, threads: int | None = None) -> dict:
     """Bake every surface of a core `Scene` at `resolution`² texels and `samples` paths per texel.
 
@@ -130,7 +147,8 @@ def bake_scene(scene, resolution: int, samples: int, seed: int = 0, threads: int
         obj.select_set(True)
     view_layer.objects.active = objects[0]
     started = time.perf_counter()
-    bpy.ops.object.bake(type="COMBINED", margin=0, use_clear=True)
+    with quiet_stdout():
+        bpy.ops.object.bake(type="COMBINED", margin=0, use_clear=True)
     seconds = time.perf_counter() - started
     texels = np.empty((len(images), resolution, resolution, 3), dtype=np.float64)
     pixels = np.empty(resolution * resolution * 4, dtype=np.float32)
