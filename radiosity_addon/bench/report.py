@@ -33,24 +33,25 @@ def write_json(path: Path, rows: list[dict], notes: dict) -> None:
 
 def markdown(rows: list[dict], notes: dict) -> str:
     lines = ["# What accuracy costs: error vs time", "",
-             "Error: area-weighted relative RMS over the covered texels of the reflecting surfaces"
-             " (common grid of texels per surface), against the reference below; worst object: its"
-             " mean radiance's relative error; patch error: the same on means over each patch's texels"
-             " (the solve's own error, without the piecewise-constant display error). ★ = on the scene's Pareto front (nothing is both faster"
+             "Error: area-weighted relative RMS of reflected radiance over the covered texels of the"
+             " reflecting surfaces (a common grid of texels per surface), against the reference below,"
+             " our patches/elements shown as a bilinearly filtered lightmap shows them; constant: the"
+             " same shown piecewise constant; patch: means over each patch's texels (the solve's own"
+             " error without the display error); worst object: its mean radiance's relative error. ★ = on the scene's Pareto front (nothing is both faster"
              " and more accurate).", ""]
     for scene in scenes_of(rows):
         note = notes[scene]
         floor = f"; reference noise floor {note['noise_floor']:.4f}" if note.get("noise_floor") else ""
         lines += [f"## {scene}", "",
                   f"Reference: {note['reference']}, {note['texels_per_surface_side']}² texels per surface{floor}.", "",
-                  "| method | settings | seconds | error | patch error | worst object (error) | stages (s) |",
-                  "|---|---|---:|---:|---:|---|---|"]
+                  "| method | settings | seconds | error | constant | patch | worst object (error) | stages (s) |",
+                  "|---|---|---:|---:|---:|---:|---|---|"]
         for row in sorted((r for r in rows if r["scene"] == scene), key=lambda r: (r["method"], r["seconds"])):
             stages = ", ".join(f"{k} {v:.2f}" for k, v in row["timings"].items() if k != "total")
             star = " ★" if row.get("pareto") else ""
-            patch_error = f"{row['patch_error']:.4f}" if "patch_error" in row else "—"
+            extra = " | ".join(f"{row[key]:.4f}" if key in row else "—" for key in ("constant_error", "patch_error"))
             lines.append(f"| {row['method']}{star} | {describe(row['settings'])} | {row['seconds']:.2f} |"
-                         f" {row['error']:.4f} | {patch_error} | {row['worst_object']} ({row['worst_object_error']:.4f}) | {stages} |")
+                         f" {row['error']:.4f} | {extra} | {row['worst_object']} ({row['worst_object_error']:.4f}) | {stages} |")
         front = [r for r in sorted(rows, key=lambda r: r["seconds"]) if r["scene"] == scene and r.get("pareto")]
         lines += ["", "Pareto front: " + " → ".join(
             f"{r['method']} ({describe(r['settings'])}) {r['seconds']:.2f} s / {r['error']:.4f}" for r in front), ""]

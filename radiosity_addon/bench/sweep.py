@@ -45,7 +45,7 @@ def make_plan(quick: bool) -> SweepPlan:
                                    solver=("gauss-seidel",)),
             # progressive costs ~14 s at subdiv 4 on llvmpipe (visibility maps and shots are fragment work)
             progressive=one_at_a_time(progressive, subdiv=(2,), elements=(8,), tolerance=(1e-2,)),
-            analytic_subdivisions={"hemicube": (2, 4, 8), "progressive": (2, 4)},
+            analytic_subdivisions={"hemicube": (2, 4, 8), "progressive": (1, 2)},
         )
     return SweepPlan(
         texel_resolution=32, reference_samples=4096, cycles_samples=(4, 16, 64, 256, 1024),
@@ -79,14 +79,16 @@ class Evaluation:
 
 def solve_row(evaluation: Evaluation, settings: SolveSettings, ctx) -> dict:
     solution = solve(evaluation.scene, settings, ctx=ctx)
-    texels = metrics.reflected(evaluation.scene, solution_texels(
+    constant, interpolated = (metrics.reflected(evaluation.scene, solution_texels(
         evaluation.scene, solution.patches, solution.patch_radiosity, solution.element_radiosity,
-        evaluation.resolution))
+        evaluation.resolution, interpolate)) for interpolate in (False, True))
     report = solution.report
     owners = texel_patches(evaluation.scene, solution.patches, evaluation.resolution)
-    footprint = metrics.footprint_rms(texels, evaluation.reference, evaluation.weights, owners)
+    footprint = metrics.footprint_rms(constant, evaluation.reference, evaluation.weights, owners)
     return {"scene": evaluation.name, "method": settings.method, "settings": compact_settings(settings),
-            "seconds": report["timings"]["total"], **evaluation.errors(texels), "patch_error": footprint,
+            "seconds": report["timings"]["total"], **evaluation.errors(interpolated),
+            "constant_error": metrics.relative_rms(constant, evaluation.reference, evaluation.weights),
+            "patch_error": footprint,
             "timings": report["timings"], "counts": report["counts"],
             "iterations": report.get("iterations", report.get("shots"))}
 

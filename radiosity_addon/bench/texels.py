@@ -77,16 +77,52 @@ def _locate(is_triangle: bool, n: int, s: np.ndarray, t: np.ndarray):
     return row, 2 * column + inverted, local_s, local_t
 
 
-def solution_texels(scene: Scene, patches: Patches, patch_radiosity: np.ndarray,
-                    element_radiosity: np.ndarray | None, resolution: int) -> np.ndarray:
-    """(surfaces, R, R, 3): our piecewise-constant answer averaged over each texel.
+def surface_grid(patches: Patches, surface_index: int, patch_radiosity: np.ndarray,
+                 element_radiosity: np.ndarray | None) -> np.ndarray:
+    """(m, m, 3) values of a quad surface on its regular grid of patches (m = n) or elements
+    (m = n·S), indexed [t row, s column]."""
+    n = patches.subdiv
+    members = np.flatnonzero(patches.surface == surface_index)
+    rows, columns = patches.grid[members, 0], patches.grid[members, 1]
+    if element_radiosity is None:
+        grid = np.zeros((n, n, 3))
+        grid[rows, columns] = patch_radiosity[members]
+        return grid
+    size = element_radiosity.shape[1]
+    grid = np.zeros((n, size, n, size, 3))
+    grid[rows, :, columns, :] = element_radiosity[members]
+    return grid.reshape(n * size, n * size, 3)
 
-    Per element where the solution has elements and the patch is a quad, else per patch.
+
+def bilinear_on_grid(grid: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Bilinear interpolation between cell centres of `grid` (m, m, 3), clamped at the border: what
+    a lightmap with one texel per cell shows under bilinear filtering."""
+    m = grid.shape[0]
+    x, y = np.clip(s * m - 0.5, 0, m - 1), np.clip(t * m - 0.5, 0, m - 1)
+    x0, y0 = np.minimum(np.floor(x).astype(np.int64), m - 2 if m > 1 else 0), np.minimum(
+        np.floor(y).astype(np.int64), m - 2 if m > 1 else 0)
+    x1, y1 = np.minimum(x0 + 1, m - 1), np.minimum(y0 + 1, m - 1)
+    fx, fy = (x - x0)[..., None], (y - y0)[..., None]
+    return ((1 - fy) * ((1 - fx) * grid[y0, x0] + fx * grid[y0, x1])
+            + fy * ((1 - fx) * grid[y1, x0] + fx * grid[y1, x1]))
+
+
+def solution_texels(scene: Scene, patches: Patches, patch_radiosity: np.ndarray,
+                    element_radiosity: np.ndarray | None, resolution: int, interpolate: bool = False) -> np.ndarray:
+    """(surfaces, R, R, 3): our answer averaged over each texel.
+
+    Per element where the solution has elements and the patch is a quad, else per patch; piecewise
+    constant, or with `interpolate` bilinear between cell centres on quad surfaces (as a lightmap
+    shows it; triangle surfaces stay piecewise constant).
     """
     lookup = _patch_lookup(patches, len(scene.surfaces))
     s, t = sample_parameters(resolution)
     texels = np.zeros((len(scene.surfaces), resolution, resolution, 3))
     for index, surface in enumerate(scene.surfaces):
+        if interpolate and not surface.is_triangle:
+            grid = surface_grid(patches, index, patch_radiosity, element_radiosity)
+            texels[index] = bilinear_on_grid(grid, s, t).mean(axis=2)
+            continue
         row, column, local_s, local_t = _locate(surface.is_triangle, patches.subdiv, s, t)
         patch = lookup[index, row, column]
         values = patch_radiosity[patch]
