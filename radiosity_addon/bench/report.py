@@ -15,6 +15,14 @@ def describe(settings: dict) -> str:
                      for key, value in settings.items())
 
 
+def machine_line(machine: dict | None) -> str:
+    if not machine:
+        return ""
+    load = ", ".join(f"{v:.1f}" for v in machine.get("load_average_after_sweep", ()))
+    return (f"Machine: {machine.get('cpus')} CPUs, OpenGL renderer {machine.get('gl_renderer')};"
+            f" load average after the sweep {load} (timings are wall time on a shared machine).")
+
+
 def scenes_of(rows: list[dict]) -> list[str]:
     return list(dict.fromkeys(row["scene"] for row in rows))
 
@@ -27,18 +35,18 @@ def mark_pareto(rows: list[dict]) -> None:
             row["pareto"] = True
 
 
-def write_json(path: Path, rows: list[dict], notes: dict) -> None:
-    path.write_text(json.dumps({"rows": rows, "scenes": notes}, indent=1, default=float))
+def write_json(path: Path, rows: list[dict], notes: dict, machine: dict | None = None) -> None:
+    path.write_text(json.dumps({"rows": rows, "scenes": notes, "machine": machine}, indent=1, default=float))
 
 
-def markdown(rows: list[dict], notes: dict) -> str:
+def markdown(rows: list[dict], notes: dict, machine: dict | None = None) -> str:
     lines = ["# What accuracy costs: error vs time", "",
              "Error: area-weighted relative RMS of reflected radiance over the covered texels of the"
              " reflecting surfaces (a common grid of texels per surface), against the reference below,"
              " our patches/elements shown as a bilinearly filtered lightmap shows them; constant: the"
              " same shown piecewise constant; patch: means over each patch's texels (the solve's own"
-             " error without the display error); worst object: its mean radiance's relative error. ★ = on the scene's Pareto front (nothing is both faster"
-             " and more accurate).", ""]
+             " error without the display error); worst object: its mean radiance's relative error."
+             " ★ = on the scene's Pareto front (nothing is both faster and more accurate).", "", machine_line(machine), ""]
     for scene in scenes_of(rows):
         note = notes[scene]
         floor = f"; reference noise floor {note['noise_floor']:.4f}" if note.get("noise_floor") else ""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import platform
 import sys
 import time
 from pathlib import Path
@@ -23,6 +25,7 @@ def run_bench(output_dir: Path, quick: bool, cache_dir: Path | None = None, tabl
     cache_dir = Path(cache_dir) if cache_dir else output_dir / "cache"
     plan = sweep.make_plan(quick)
     started = time.perf_counter()
+    machine = {"cpus": os.cpu_count(), "platform": platform.platform(), "load_average_at_start": os.getloadavg()}
     rows, notes = [], {}
     with gl.gl_context() as ctx:
         for name in scenes:
@@ -31,8 +34,10 @@ def run_bench(output_dir: Path, quick: bool, cache_dir: Path | None = None, tabl
             scene_rows, notes[name] = sweep.sweep_scene(name, scene, plan, ctx, cache_dir, log)
             rows += scene_rows
         report.mark_pareto(rows)
-        report.write_json(output_dir / "accuracy_vs_time.json", rows, notes)
-        (output_dir / "accuracy_vs_time.md").write_text(report.markdown(rows, notes))
+        machine["load_average_after_sweep"] = os.getloadavg()  # the timings are only as quiet as the machine
+        machine["gl_renderer"] = ctx.info.get("GL_RENDERER")
+        report.write_json(output_dir / "accuracy_vs_time.json", rows, notes, machine)
+        (output_dir / "accuracy_vs_time.md").write_text(report.markdown(rows, notes, machine))
         report.plot(output_dir / "accuracy_vs_time.png", rows, notes)
         samples = table51_samples if table51_samples is not None else (5 if quick else table51.SAMPLES)
         if samples > 0:
