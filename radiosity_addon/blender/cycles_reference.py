@@ -37,7 +37,7 @@ def _set_input(node, names, value):
 
 def _material(bpy, surface, image):
     material = bpy.data.materials.new(f"{surface.name}_material")
-    if hasattr(material, "use_nodes") and not material.use_nodes:
+    if material.node_tree is None:  # Blender < 5 makes the node tree only on request
         material.use_nodes = True
     nodes, links = material.node_tree.nodes, material.node_tree.links
     nodes.clear()
