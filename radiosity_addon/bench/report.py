@@ -20,7 +20,7 @@ def machine_line(machine: dict | None) -> str:
         return ""
     load = ", ".join(f"{v:.1f}" for v in machine.get("load_average_after_sweep", ()))
     return (f"Machine: {machine.get('cpus')} CPUs, OpenGL renderer {machine.get('gl_renderer')};"
-            f" load average after the sweep {load} (timings are wall time on a shared machine).")
+            f" 1/5/15-minute load average at the end {load} (timings are wall time on a shared machine).")
 
 
 def scenes_of(rows: list[dict]) -> list[str]:

@@ -42,7 +42,10 @@ def run_bench(output_dir: Path, quick: bool, cache_dir: Path | None = None, tabl
         samples = table51_samples if table51_samples is not None else (5 if quick else table51.SAMPLES)
         if samples > 0:
             log("Table 5.1:")
-            table51.write(output_dir, table51.measure(ctx, samples, log=log))
+            measured = table51.measure(ctx, samples, log=log)
+            machine["load_average_after_table_5_1"] = os.getloadavg()
+            table51.write(output_dir, measured, report.machine_line(
+                machine | {"load_average_after_sweep": machine["load_average_after_table_5_1"]}))
     seconds = time.perf_counter() - started
     log(f"bench done in {seconds:.0f} s; outputs in {output_dir}")
     return {"rows": rows, "scenes": notes, "seconds": seconds}

@@ -79,11 +79,11 @@ def winner(solvers: dict) -> str:
     return min(solvers, key=lambda column: solvers[column]["mean_ms"])
 
 
-def markdown(rows: list[dict]) -> str:
+def markdown(rows: list[dict], machine_line: str = "") -> str:
     lines = ["# Table 5.1 reproduced: linear-solve time (ms) vs patch count", "",
              "Mean ± standard deviation of timed solves of the Cornell box's form-factor system."
              " Dissertation: its Tabela 5.1 (2011 hardware, a real GPU). Ours: this machine"
-             " (\"GPU\" = Mesa llvmpipe, i.e. the CPU cores running the compute shader).", ""]
+             " (\"GPU\" = Mesa llvmpipe, i.e. the CPU cores running the compute shader).", "", machine_line, ""]
     for label in TOLERANCES:
         lines += [f"## Stopping rule: {label}", "",
                   "| patches (theirs / ours) | Seidel theirs | Seidel ours | JacCPU theirs | JacCPU ours"
@@ -103,7 +103,7 @@ def markdown(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def write(output_dir: Path, rows: list[dict]) -> None:
+def write(output_dir: Path, rows: list[dict], machine_line: str = "") -> None:
     Path(output_dir, "table_5_1.json").write_text(json.dumps({"rows": rows, "dissertation_ms": DISSERTATION},
                                                               indent=1))
-    Path(output_dir, "table_5_1.md").write_text(markdown(rows))
+    Path(output_dir, "table_5_1.md").write_text(markdown(rows, machine_line))
