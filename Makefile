@@ -40,5 +40,13 @@ extension: setup
 samples: setup
 	$(PY) tools/make_sample_blends.py
 
+# accuracy vs time against Cycles and exact answers, and the dissertation's Table 5.1
+# (the Cycles reference is cached in $(OUT)/bench*/cache, so reruns are cheap)
+bench: setup
+	$(PY) -m radiosity_addon bench --output-dir $(OUT)/bench
+
+bench-quick: setup
+	$(PY) -m radiosity_addon bench --quick --output-dir $(OUT)/bench-quick
+
 clean:
 	rm -rf $(OUT) dist build .pytest_cache

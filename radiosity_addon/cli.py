@@ -185,6 +185,14 @@ def command_bake(args) -> int:
     return 0
 
 
+def command_bench(args) -> int:
+    from .bench.run import run_bench
+
+    run_bench(Path(args.output_dir), args.quick, args.cache_dir, args.table51_samples,
+              tuple(name for name in args.scenes.split(",") if name))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m radiosity_addon",
                                      description="Radiosity Baker: diffuse GI by radiosity on the GPU.")
@@ -233,6 +241,18 @@ def build_parser() -> argparse.ArgumentParser:
     add_solver_options(bake_parser)
     bake_parser.add_argument("--quiet", action="store_true", help="no progress line")
     bake_parser.set_defaults(handler=command_bake)
+
+    bench_parser = commands.add_parser(
+        "bench", help="accuracy vs time against Cycles and exact answers, and the dissertation's Table 5.1")
+    bench_parser.add_argument("--quick", action="store_true", help="a smaller sweep: a few minutes on 2 cores")
+    bench_parser.add_argument("--output-dir", required=True, metavar="DIR",
+                              help="writes accuracy_vs_time.{json,md,png} and table_5_1.{json,md}")
+    bench_parser.add_argument("--cache-dir", metavar="DIR", help="Cycles reference cache (default DIR/cache)")
+    bench_parser.add_argument("--table51-samples", type=int, default=None, metavar="N",
+                              help="timed solves per solver and size for Table 5.1 (default 30, quick 5; 0 skips)")
+    bench_parser.add_argument("--scenes", default="cornell-box,furnace,plates",
+                              help="comma-separated: cornell-box (Cycles reference), furnace, plates (exact)")
+    bench_parser.set_defaults(handler=command_bench)
     return parser
 
 
