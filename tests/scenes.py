@@ -4,16 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-# Faces of the unit cube, counter-clockwise seen from outside; `closed_cube` reverses
-# them so the fronts look inward.
-CUBE_FACES = {
-    "floor": [[0, 0, 0], [0, 1, 0], [1, 1, 0], [1, 0, 0]],
-    "ceiling": [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
-    "wall_y0": [[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]],
-    "wall_y1": [[0, 1, 0], [0, 1, 1], [1, 1, 1], [1, 1, 0]],
-    "wall_x0": [[0, 0, 0], [0, 0, 1], [0, 1, 1], [0, 1, 0]],
-    "wall_x1": [[1, 0, 0], [1, 1, 0], [1, 1, 1], [1, 0, 1]],
-}
+from radiosity_addon.bench.scenes import CUBE_FACES, opposed_rectangles_form_factor  # noqa: F401 (re-exported)
 
 
 def surface(name, vertices, reflectance, emission, obj=None):
@@ -28,7 +19,7 @@ def surface(name, vertices, reflectance, emission, obj=None):
 def closed_cube(reflectance=0.5, emission=1.0, emitting=None, scale=1.0):
     """Unit cube (times `scale`); every face emits `emission` unless `emitting` names the faces that do."""
     return {"surfaces": [
-        surface(name, np.asarray(v, float)[::-1] * scale, reflectance,
+        surface(name, np.asarray(v, float) * scale, reflectance,
                 emission if emitting is None or name in emitting else 0.0)
         for name, v in CUBE_FACES.items()
     ]}
@@ -50,17 +41,6 @@ def perpendicular_squares(receiver_reflectance=0.5, emitter_emission=1.0):
     emitter = [[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1]]
     return {"surfaces": [surface("receiver", receiver, receiver_reflectance, 0.0),
                          surface("emitter", emitter, 0.0, emitter_emission)]}
-
-
-def opposed_rectangles_form_factor(a, b, c):
-    """Exact F between opposed equal a x b rectangles at distance c (DESIGN.md)."""
-    x, y = a / c, b / c
-    return 2 / (np.pi * x * y) * (
-        np.log(np.sqrt((1 + x * x) * (1 + y * y) / (1 + x * x + y * y)))
-        + x * np.sqrt(1 + y * y) * np.arctan(x / np.sqrt(1 + y * y))
-        + y * np.sqrt(1 + x * x) * np.arctan(y / np.sqrt(1 + x * x))
-        - x * np.arctan(x) - y * np.arctan(y)
-    )
 
 
 def area_weighted_mean(solution, surface_index):

@@ -12,6 +12,7 @@ import pytest
 from radiosity_addon.core import gl
 from radiosity_addon.core.element_textures import ElementLayout, ElementTextures, element_areas, element_centers
 from radiosity_addon.core.padding import pad_tiles
+from radiosity_addon.bench.scenes import CUBE_FACES, opposed_rectangles_form_factor
 from radiosity_addon.core.patches import subdivide
 from radiosity_addon.core.form_factor_kernels import point_to_clipped_polygon as point_polygon_form_factor
 from radiosity_addon.core.scene import load_scene, polygon_normal, scene_from_dict
@@ -19,17 +20,6 @@ from radiosity_addon.core.shooting import Gatherer, PatchBuffers, Selector, patc
 from radiosity_addon.core.solution import SolveSettings
 from radiosity_addon.core.solve import solve
 from radiosity_addon.core.visibility import VisibilityMap
-
-# unit cube, every face's front inside
-CUBE_FACES = {
-    "floor": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
-    "ceiling": [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]],
-    "x0": [[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1]],
-    "x1": [[1, 0, 0], [1, 0, 1], [1, 1, 1], [1, 1, 0]],
-    "y0": [[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0]],
-    "y1": [[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, 1]],
-}
-
 
 def cube(reflectance: float, emission: dict) -> object:
     return scene_from_dict({"surfaces": [
@@ -39,15 +29,8 @@ def cube(reflectance: float, emission: dict) -> object:
     ]})
 
 
-def opposed_squares(c: float = 1.0, a: float = 1.0, b: float = 1.0) -> float:
-    """Opposed equal rectangles a x b at distance c (DESIGN.md oracle)."""
-    x, y = a / c, b / c
-    return 2 / (np.pi * x * y) * (
-        np.log(np.sqrt((1 + x * x) * (1 + y * y) / (1 + x * x + y * y)))
-        + x * np.sqrt(1 + y * y) * np.arctan(x / np.sqrt(1 + y * y))
-        + y * np.sqrt(1 + x * x) * np.arctan(y / np.sqrt(1 + x * x))
-        - x * np.arctan(x) - y * np.arctan(y)
-    )
+def opposed_squares(c: float = 1.0) -> float:
+    return opposed_rectangles_form_factor(1.0, 1.0, c)
 
 
 def perpendicular_rectangles(w: float = 1.0, h: float = 1.0, length: float = 1.0) -> float:

@@ -18,20 +18,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from radiosity_addon.bench.scenes import CUBE_FACES  # noqa: E402
 from radiosity_addon.core import gl  # noqa: E402
 from radiosity_addon.core.scene import load_scene, scene_from_dict  # noqa: E402
 from radiosity_addon.core.solution import SolveSettings  # noqa: E402
 from radiosity_addon.core.solve import solve  # noqa: E402
-
-CUBE_FACES = {
-    "floor": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
-    "ceiling": [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]],
-    "x0": [[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1]],
-    "x1": [[1, 0, 0], [1, 0, 1], [1, 1, 1], [1, 1, 0]],
-    "y0": [[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0]],
-    "y1": [[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, 1]],
-}
-
 
 def furnace(ctx, args):
     scene = scene_from_dict({"surfaces": [

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.form_factor_kernels import point_to_polygon
 from ..core.scene import Scene, scene_from_dict
 from .texels import sample_parameters, surface_points
 
@@ -18,14 +19,26 @@ FURNACE_EMISSION = 1.0
 PLATES_REFLECTANCE = 0.8
 PLATES_EMISSION = 1.0
 
-CUBE_FACES = {  # inward-facing (counter-clockwise seen from inside)
-    "bottom": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
-    "top": [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]],
-    "front": [[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0]],
-    "back": [[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, 1]],
-    "left": [[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1]],
-    "right": [[1, 0, 0], [1, 0, 1], [1, 1, 1], [1, 1, 0]],
+# the unit cube, every face's front inside (counter-clockwise seen from inside)
+CUBE_FACES = {
+    "floor": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
+    "ceiling": [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]],
+    "x0": [[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1]],
+    "x1": [[1, 0, 0], [1, 0, 1], [1, 1, 1], [1, 1, 0]],
+    "y0": [[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0]],
+    "y1": [[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, 1]],
 }
+
+
+def opposed_rectangles_form_factor(a: float, b: float, c: float) -> float:
+    """Exact F between opposed equal a x b rectangles at distance c (DESIGN.md)."""
+    x, y = a / c, b / c
+    return 2 / (np.pi * x * y) * (
+        np.log(np.sqrt((1 + x * x) * (1 + y * y) / (1 + x * x + y * y)))
+        + x * np.sqrt(1 + y * y) * np.arctan(x / np.sqrt(1 + y * y))
+        + y * np.sqrt(1 + x * x) * np.arctan(y / np.sqrt(1 + x * x))
+        - x * np.arctan(x) - y * np.arctan(y)
+    )
 
 
 def furnace_scene(reflectance: float = FURNACE_REFLECTANCE, emission: float = FURNACE_EMISSION,
@@ -46,19 +59,6 @@ def plates_scene(distance: float = 1.0) -> Scene:
     ]})
 
 
-def point_to_polygon_form_factor(points: np.ndarray, normal: np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """Lambert's exact form factor from differential areas at `points` (…, 3) with `normal` to a polygon
-    (k, 3) fully in front of them: F = |Σ_edges γ_k n · (r_k × r_k+1)/|r_k × r_k+1|| / 2π."""
-    r = polygon[None] - points.reshape(-1, 1, 3)
-    r_next = np.roll(r, -1, axis=1)
-    cross = np.cross(r, r_next)
-    unit_cross = cross / np.linalg.norm(cross, axis=2, keepdims=True)
-    cosine = (r * r_next).sum(axis=2) / (np.linalg.norm(r, axis=2) * np.linalg.norm(r_next, axis=2))
-    gamma = np.arccos(np.clip(cosine, -1, 1))
-    total = (gamma * (unit_cross @ normal)).sum(axis=1)
-    return np.abs(total).reshape(points.shape[:-1]) / (2 * np.pi)
-
-
 def exact_texels(name: str, scene: Scene, resolution: int) -> np.ndarray:
     """(surfaces, R, R, 3) exact answer averaged over each texel, for the analytic scenes."""
     texels = np.zeros((len(scene.surfaces), resolution, resolution, 3))
@@ -76,3 +76,11 @@ def exact_texels(name: str, scene: Scene, resolution: int) -> np.ndarray:
 
 
 ANALYTIC_SCENES = {"furnace": furnace_scene, "plates": plates_scene}
+
+
+def point_to_polygon_form_factor(points: np.ndarray, normal: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """Lambert's exact form factor from differential areas at `points` (..., 3), all with `normal`,
+    to one polygon (k, 3) in front of them (core/form_factor_kernels.point_to_polygon)."""
+    flat = points.reshape(-1, 3)
+    factor = point_to_polygon(flat, np.broadcast_to(normal, flat.shape), np.asarray(polygon, dtype=float)[None])
+    return factor[:, 0].reshape(points.shape[:-1])
