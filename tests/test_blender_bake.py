@@ -44,6 +44,9 @@ def test_cornell_bake_writes_an_image_uv_map_and_wiring_per_object():
     assert mean["light"].max() > 5 * max(m.max() for name, m in mean.items() if name != "light")
     assert mean["left_wall"][0] > 2 * mean["left_wall"][1]
     assert mean["right_wall"][1] > 2 * mean["right_wall"][0]
+    # the panel's record of what the scene analysis let this bake simulate
+    last = bpy.context.scene.radiosity.last_bake
+    assert last.startswith("3 channel(s) · occlusion · interreflection · 1 emitter(s)"), last
 
 
 def test_two_bakes_leave_one_image_per_object_and_no_extra_materials():

@@ -109,3 +109,12 @@ def test_progressive_interreflection_skip_shoots_only_the_emitter(ctx):
     assert analysed.report["effects"]["residual_updates"] is False
     assert full.report["shots"] > analysed.report["shots"]
     np.testing.assert_allclose(analysed.element_radiosity, full.element_radiosity, rtol=1e-4, atol=1e-7)
+
+
+def test_effects_summary_names_what_was_skipped(ctx):
+    scene = scene_from_dict(closed_cube(reflectance=0.0, emitting={"ceiling"}))
+    solution = solve(scene, SolveSettings(method="hemicube", subdiv=2), ctx=ctx)
+    from radiosity_addon.core.effects import effects_summary
+
+    line = effects_summary(solution.report)
+    assert line.startswith("1 channel(s) · no occlusion (skipped) · direct light only · 1 emitter(s) · 0 hemi-cubes")

@@ -11,6 +11,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..core.effects import effects_summary
 from ..core.gl import GLUnavailable
 from ..core.scene import SceneError
 from ..core.solution import SolveCancelled, SolveError
@@ -35,6 +36,7 @@ class BakePlan:
     warnings: list = field(default_factory=list)
     started: float = field(default_factory=time.monotonic)
     report: dict = field(default_factory=dict)  # the solve's report, once finished
+    scene: object = None  # the bpy scene baked: its settings record what the bake simulated
     summary: str = ""
 
 
@@ -81,7 +83,7 @@ def prepare(context, settings, objects=None, output_dir=None) -> BakePlan:
                         settings.lightmap_options(baked))
     warnings = list(exported.warnings)
     return BakePlan(objects=baked, worker=worker, output=output, directory=directory,
-                    added_uv_meshes=added, warnings=warnings)
+                    added_uv_meshes=added, warnings=warnings, scene=context.scene)
 
 
 def rollback(plan: BakePlan) -> None:
@@ -114,6 +116,7 @@ def finish(plan: BakePlan) -> str:
         rollback(plan)
         raise
     seconds = time.monotonic() - plan.started
+    plan.scene.radiosity.last_bake = effects_summary(report)
     counts = report.get("counts", {})
     return (f"baked {len(plan.objects)} object(s) in {seconds:.1f} s ({report.get('method')},"
             f" {counts.get('patches', '?')} patches)")

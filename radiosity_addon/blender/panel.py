@@ -53,6 +53,8 @@ class RENDER_PT_radiosity_bake(bpy.types.Panel):
             column.prop(obj.radiosity, "lightmap_resolution", text=f"{obj.name} Resolution")
 
         layout.operator("radiosity.remove_bake", icon="LOOP_BACK")
+        if settings.last_bake:  # what the scene analysis let the last bake skip
+            layout.label(text=settings.last_bake, icon="INFO")
 
 
 CLASSES = (RENDER_PT_radiosity_bake,)

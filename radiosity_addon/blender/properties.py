@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import bpy
-from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
 from ..core.solution import SolveSettings
 from .worker import LightmapOptions
@@ -56,6 +56,8 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
                              description="Margin of the Lightmap Pack used for meshes without a 'Lightmap'"
                                          " UV map")
     output: EnumProperty(name="Output", items=OUTPUT_ITEMS, default="PACK")
+    last_bake: StringProperty(name="Last Bake", default="",
+                              description="What the last bake simulated and skipped (scene analysis)")
     include_unselected: BoolProperty(name="Unselected Occlude", default=True,
                                      description="Visible unselected meshes block and reflect light"
                                                  " (they get no lightmap)")

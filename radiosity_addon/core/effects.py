@@ -119,3 +119,21 @@ def analyse(scene: Scene) -> SceneEffects:
 def effects_for(scene: Scene, skip_unneeded: bool) -> SceneEffects:
     """What to simulate: the analysis, or everything when skips are disabled."""
     return analyse(scene) if skip_unneeded else SceneEffects.everything(emitter_count(scene))
+
+
+def effects_summary(report: dict) -> str:
+    """One line saying what a solve simulated and skipped (the Blender panel shows it)."""
+    effects = report.get("effects", {})
+    said = [f"{effects.get('channels_solved', effects.get('channels', 3))} channel(s)",
+            "occlusion" if effects.get("occlusion", True) else "no occlusion (skipped)",
+            "interreflection" if effects.get("interreflection", True) else "direct light only",
+            f"{effects.get('emitters', 0)} emitter(s)"]
+    work = report.get("shots")
+    if work is not None:
+        said.append(f"{work} shots")
+    elif "hemicubes" in effects:
+        said.append(f"{effects['hemicubes']} hemi-cubes")
+    total = report.get("timings", {}).get("total")
+    if total is not None:
+        said.append(f"{total:.1f} s")
+    return " · ".join(said)
