@@ -20,13 +20,13 @@
 // orthographic item buffer; the sky (kind 3) F = each element's unoccluded
 // cosine-weighted fraction of its hemisphere (shooter_radiosity: the world colour).
 //
-// Defines: ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN, RECORD_VISIBILITY,
+// Defines: IMAGE_FORMAT, ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN, RECORD_VISIBILITY,
 // OCCLUSION (0: the scene analysis proved nothing occludes, V = 1 for facing receivers),
 // INTERREFLECTION (0: nothing a receiver reflects can reach a reflector, so no residual).
 layout(local_size_x = 64) in;
 
-layout(rgba32f, binding = 0) uniform image2D radiosity;
-layout(rgba32f, binding = 1) uniform image2D residual;
+layout(IMAGE_FORMAT, binding = 0) uniform image2D radiosity;  // rgba32f, or r32f for a grey scene
+layout(IMAGE_FORMAT, binding = 1) uniform image2D residual;
 uniform usampler2D item_buffer;
 uniform sampler2D distance_map;     // distance from the eye of what each item texel shows (0: nothing)
 

@@ -118,3 +118,14 @@ def test_effects_summary_names_what_was_skipped(ctx):
 
     line = effects_summary(solution.report)
     assert line.startswith("1 channel(s) · no occlusion (skipped) · direct light only · 1 emitter(s) · 0 hemi-cubes")
+
+
+def test_progressive_channel_skip_matches_full(ctx):
+    """A grey scene with an occluder: one-channel (R32F) textures give the RGB solve's answer."""
+    scene = grey_room_with_occluder()
+    analysed, full = (solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3, skip_unneeded=skip), ctx=ctx)
+                      for skip in (True, False))
+    assert analysed.report["effects"]["channels_solved"] == 1 and full.report["effects"]["channels_solved"] == 3
+    assert analysed.report["effects"]["texel_bytes"] * 4 == full.report["effects"]["texel_bytes"]
+    assert analysed.report["shots"] == full.report["shots"]
+    np.testing.assert_allclose(analysed.element_radiosity, full.element_radiosity, rtol=1e-5, atol=1e-9)

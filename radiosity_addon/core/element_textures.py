@@ -92,23 +92,39 @@ class ElementLayout:
 
 
 class ElementTextures:
-    """The radiosity and residual textures of one solve, initialised to the emission."""
+    """The radiosity and residual textures of one solve, initialised to the emission.
+    `channels` 3: RGBA32F texels; 1 (a grey scene): R32F texels holding the one channel
+    (the shaders' vec4 math then carries zeros in g, b, a)."""
 
-    def __init__(self, ctx, patches: Patches, elements: int, gutter: int = GUTTER):
+    def __init__(self, ctx, patches: Patches, elements: int, gutter: int = GUTTER, channels: int = 3):
         from .padding import pad_tiles
 
         self.ctx = ctx
+        self.channels = channels
         self.layout = layout = ElementLayout(len(patches), elements, gutter)
         self.areas = element_areas(patches, elements)  # (P, S, S) float64
         self.weights = self.areas * elements ** 2 / patches.area[:, None, None]  # a_e S^2 / A
         emission = np.broadcast_to(patches.emission[:, None, None, :], (len(patches), elements, elements, 3))
-        rgba = lambda a: np.concatenate([a, np.zeros(a.shape[:-1] + (1,))], axis=-1)  # noqa: E731
+        components = 4 if channels == 3 else 1
+        texels = lambda a: (np.concatenate([a, np.zeros(a.shape[:-1] + (1,))], axis=-1)  # noqa: E731
+                            if components == 4 else a[..., :1])
 
-        radiosity = layout.atlas(rgba(pad_tiles(emission, gutter)), padded=True)
-        self.radiosity = ctx.texture(layout.radiosity_size, 4, radiosity.astype(np.float32).tobytes(), dtype="f4")
-        residual = layout.atlas(rgba(emission * self.weights[..., None]), padded=False)
-        self.residual = ctx.texture(layout.residual_size, 4, residual.astype(np.float32).tobytes(), dtype="f4")
+        radiosity = layout.atlas(texels(pad_tiles(emission, gutter)), padded=True)
+        self.radiosity = ctx.texture(layout.radiosity_size, components, radiosity.astype(np.float32).tobytes(),
+                                     dtype="f4")
+        residual = layout.atlas(texels(emission * self.weights[..., None]), padded=False)
+        self.residual = ctx.texture(layout.residual_size, components, residual.astype(np.float32).tobytes(),
+                                    dtype="f4")
         self.build_mipmaps()
+
+    @property
+    def image_format(self) -> str:
+        """The GLSL image format of both textures."""
+        return "rgba32f" if self.channels == 3 else "r32f"
+
+    def _rgb(self, tiles: np.ndarray) -> np.ndarray:
+        """Tiles of the textures' components as RGB (a grey scene's one channel repeated)."""
+        return tiles[..., :3] if self.channels == 3 else np.repeat(tiles[..., :1], 3, axis=-1)
 
     def build_mipmaps(self) -> None:
         """Mip levels 1..log2(S) of the residual (level log2(S): tile means)."""
@@ -121,8 +137,8 @@ class ElementTextures:
     def read_padded_radiosity(self) -> np.ndarray:
         """(P, S+2g, S+2g, 3) float64: the padded radiosity tiles."""
         w, h = self.layout.radiosity_size
-        image = np.frombuffer(self.radiosity.read(), dtype=np.float32).reshape(h, w, 4)
-        return self.layout.tiles(image, padded=True)[..., :3].astype(np.float64)
+        image = np.frombuffer(self.radiosity.read(), dtype=np.float32).reshape(h, w, self.radiosity.components)
+        return self._rgb(self.layout.tiles(image, padded=True)).astype(np.float64)
 
     def read_radiosity(self) -> np.ndarray:
         """(P, S, S, 3) float64 element radiosity."""
@@ -132,8 +148,8 @@ class ElementTextures:
     def read_residual(self) -> np.ndarray:
         """(P, S, S, 3) float64 unshot radiosity per element (the area weight divided out)."""
         w, h = self.layout.residual_size
-        image = np.frombuffer(self.residual.read(level=0), dtype=np.float32).reshape(h, w, 4)
-        return self.layout.tiles(image, padded=False)[..., :3].astype(np.float64) / self.weights[..., None]
+        image = np.frombuffer(self.residual.read(level=0), dtype=np.float32).reshape(h, w, self.residual.components)
+        return self._rgb(self.layout.tiles(image, padded=False)).astype(np.float64) / self.weights[..., None]
 
     def release(self) -> None:
         self.radiosity.release()

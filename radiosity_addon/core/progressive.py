@@ -102,7 +102,7 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
     objects = []
     try:
         with timer.stage("setup"):
-            textures = ElementTextures(ctx, patches, settings.elements)
+            textures = ElementTextures(ctx, patches, settings.elements, channels=effects.channels)
             objects.append(textures)
             buffers = PatchBuffers(ctx, patches, textures)
             objects.append(buffers)
@@ -184,10 +184,10 @@ def solve_progressive(ctx, scene: Scene, patches: Patches, settings: SolveSettin
         "kernel": settings.kernel,
         "elements_per_patch": settings.elements,
         "shots_per_second": shots / solve_seconds if solve_seconds > 0 else None,
-        # what was actually run (the report's effects). Channels: the GPU shoots RGBA texels,
-        # so a grey scene costs the same; it is solved in three channels.
+        # what was actually run (the report's effects)
         "work": {"visibility_maps": (shots if effects.occlusion else 0) + direct["lamp_visibility_maps"],
-                 "shots": shots, "channels_solved": 3, "residual_updates": bool(effects.interreflection),
+                 "shots": shots, "channels_solved": effects.channels,
+                 "texel_bytes": 16 if effects.channels == 3 else 4, "residual_updates": bool(effects.interreflection),
                  **direct},
     }
     return patch_radiosity, elements, details

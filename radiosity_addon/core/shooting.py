@@ -129,9 +129,11 @@ class Selector:
         raw = np.frombuffer(self.result.read(), dtype=np.float32)
         index = int(np.frombuffer(raw[1].tobytes(), dtype=np.int32)[0])
         score = float(raw[0])
-        return Selection(patch=index if score > 0 else -1, score=score, residual=raw[4:7].astype(np.float64),
-                         centroid=raw[2:4].astype(np.float64),
-                         unshot=raw[8:11].astype(np.float64), last_shot=raw[12:16].astype(np.float64))
+        residual, unshot = raw[4:7].astype(np.float64), raw[8:11].astype(np.float64)
+        if self.textures.channels == 1:  # a grey scene's one channel stands for all three
+            residual, unshot = np.repeat(residual[:1], 3), np.repeat(unshot[:1], 3)
+        return Selection(patch=index if score > 0 else -1, score=score, residual=residual,
+                         centroid=raw[2:4].astype(np.float64), unshot=unshot, last_shot=raw[12:16].astype(np.float64))
 
     def release(self) -> None:
         self.program.release()
@@ -149,7 +151,8 @@ class Gatherer:
         self.ctx, self.textures, self.buffers = ctx, textures, buffers
         layout = textures.layout
         self.program = gl.compute(ctx, "shoot_to_elements.comp", defines={
-            "ELEMENTS": layout.elements, "GUTTER": layout.gutter, "KERNEL_EXACT": int(kernel == "exact"),
+            "IMAGE_FORMAT": textures.image_format, "ELEMENTS": layout.elements, "GUTTER": layout.gutter,
+            "KERNEL_EXACT": int(kernel == "exact"),
             "SEARCH_RADIUS": search_radius, "RECORD_VISIBILITY": int(record_visibility),
             "OCCLUDER_MARGIN": float(occluder_margin), "OCCLUSION": int(occlusion),
             "INTERREFLECTION": int(interreflection),
