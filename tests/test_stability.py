@@ -191,6 +191,14 @@ def centre_point_reference(solution, emitter_index: int, scene) -> np.ndarray:
     return patches.reflectance[:, 0] * emitter.emission[0] * factors
 
 
+def receiver_against_centre_points(scene, ctx):
+    """Hemi-cube radiosity of surface 0's patches (red) and Lambert's centre-point reference for it."""
+    solution = solve(scene, hemicube(subdiv=8, hemicube_res=128), ctx=ctx)
+    assert_physical(solution)
+    receiving = solution.patches.surface == 0
+    return solution.patch_radiosity[receiving, 0], centre_point_reference(solution, 1, scene)[receiving]
+
+
 def test_grazing_light_stays_bounded(ctx):
     """An emitter standing 1 % of its size above the receiver's plane, beside it: light arrives at
     grazing angles, where hemi-cube side-face pixels carry almost no weight."""
@@ -198,11 +206,7 @@ def test_grazing_light_stays_bounded(ctx):
     emitter = [[1.2, 0, 0.01], [1.2, 0, 0.51], [1.2, 1, 0.51], [1.2, 1, 0.01]]  # faces −x, towards the receiver
     scene = scene_from_dict({"surfaces": [surface("receiver", receiver, 0.5, 0.0),
                                           surface("emitter", emitter, 0.0, 1.0)]})
-    solution = solve(scene, hemicube(subdiv=8, hemicube_res=128), ctx=ctx)
-    assert_physical(solution)
-    receiving = solution.patches.surface == 0
-    ours = solution.patch_radiosity[receiving, 0]
-    reference = centre_point_reference(solution, 1, scene)[receiving]
+    ours, reference = receiver_against_centre_points(scene, ctx)
     assert np.abs(ours - reference).max() < 0.02 * reference.max()  # measured 0.5 %
     assert ours.sum() == pytest.approx(reference.sum(), rel=0.01)
 
@@ -212,11 +216,7 @@ def test_long_thin_sliver_has_no_spikes(ctx):
     receiver = [[0, 0, 0], [2, 0, 0], [2, 0.02, 0], [0, 0.02, 0]]
     scene = scene_from_dict({"surfaces": [surface("receiver", receiver, 0.5, 0.0),
                                           opposed_squares(0.5)["surfaces"][1]]})
-    solution = solve(scene, hemicube(subdiv=8, hemicube_res=128), ctx=ctx)
-    assert_physical(solution)
-    receiving = solution.patches.surface == 0
-    ours = solution.patch_radiosity[receiving, 0]
-    reference = centre_point_reference(solution, 1, scene)[receiving]
+    ours, reference = receiver_against_centre_points(scene, ctx)
     assert np.abs(ours - reference).max() < 0.03 * reference.max()  # measured 0.8 %
 
 

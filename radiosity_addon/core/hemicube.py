@@ -194,13 +194,6 @@ class HemicubeRenderer:
         sums = np.frombuffer(self.row_buffer.read(size=count * self.row_length * 4), dtype=np.uint32)
         return sums.reshape(count, self.row_length).astype(np.float64) / FIXED_POINT_ONE
 
-    def item_image(self, slot: int = 0) -> np.ndarray:
-        """The item buffer of one tile (3R x R: patch id + 1, P + 1 for a back, 0 = nothing)."""
-        atlas = np.frombuffer(self.item_texture.read(), dtype=np.uint32).reshape(self.atlas_size[1], self.atlas_size[0])
-        r = self.resolution
-        x, y = (slot % self.tiles_per_row) * r, (slot // self.tiles_per_row) * 3 * r
-        return atlas[y:y + 3 * r, x:x + r]
-
     def release(self):
         for obj in (self.vao, self.vertex_buffer, self.index_buffer, self.instance_buffer, self.framebuffer,
                     self.item_texture, self.depth, self.reduce, self.weight_buffer, self.row_buffer, self.program):

@@ -63,13 +63,6 @@ def downsample_weighted(values: np.ndarray, weight: np.ndarray) -> tuple[np.ndar
     return level, weight_sum / 4
 
 
-def downsample_covered(values: np.ndarray, covered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Halve an image by 2x2 coverage-weighted means; a texel is covered if any child is.
-    Odd sizes are padded with uncovered texels."""
-    level, weight = downsample_weighted(values, covered.astype(np.float64))
-    return level, weight > 0
-
-
 def pad_tiles(tiles: np.ndarray, gutter: int) -> np.ndarray:
     """(N, S, S, C) tiles -> (N, S + 2g, S + 2g, C) with each gutter filled from its own tile
     by `dilate` (edge texels continued outward), so filtered reads at tile edges stay correct."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -181,8 +182,7 @@ def scene_from_dict(data: dict, require_emitter: bool = True) -> Scene:
     if not data["surfaces"]:
         raise SceneError("scene: the 'surfaces' list is empty")
     surfaces = [surface_from_dict(entry, k) for k, entry in enumerate(data["surfaces"])]
-    names = [s.name for s in surfaces]
-    duplicates = sorted({n for n in names if names.count(n) > 1})
+    duplicates = sorted(name for name, count in Counter(s.name for s in surfaces).items() if count > 1)
     if duplicates:
         raise SceneError(f"surface '{duplicates[0]}': the name is used by more than one surface")
     scene = Scene(surfaces=surfaces, extras={k: v for k, v in data.items() if k != "surfaces"})
