@@ -1,4 +1,4 @@
-"""Command line: `python -m radiosity_addon {solve,bake,bench} ...` (DESIGN.md, Interfaces).
+"""Command line: `python -m radiosity_addon {solve,bake,bench} ...` (docs/architecture.md, Interfaces).
 
 Errors a user can cause end in one line on stderr and exit status 2, never a traceback.
 """
@@ -6,67 +6,80 @@ Errors a user can cause end in one line on stderr and exit status 2, never a tra
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import sys
 import time
 from pathlib import Path
 
-from .core.gl import GLUnavailable, gl_context
-from .core.lightmap import MAX_SIZE, TEXEL_DENSITY
-from .core.scene import SceneError
-from .core.solution import METHODS, SOLVERS, VISIBILITY_VARIANTS, SolveCancelled, SolveError, SolveSettings
-
-USER_ERRORS = (SceneError, SolveError, GLUnavailable, SolveCancelled, FileNotFoundError)
+from . import core
+from .core import KERNELS, MAX_LIGHTMAP_SIZE, METHODS, SHOOTING_POINTS, SOLVERS, TEXEL_DENSITY, VISIBILITY_VARIANTS
+from .core import LightmapSettings, SolveError, SolveSettings
 
 
 def user_errors() -> tuple:
-    """USER_ERRORS plus the Blender side's BakeError once that side is loaded (it needs bpy)."""
+    """The core's USER_ERRORS plus the Blender side's BakeError once that side is loaded (it needs bpy)."""
     blender_errors = sys.modules.get(f"{__package__}.blender.errors")
-    return USER_ERRORS + ((blender_errors.BakeError,) if blender_errors else ())
+    return core.USER_ERRORS + ((blender_errors.BakeError,) if blender_errors else ())
 
 
-def add_solver_options(parser: argparse.ArgumentParser) -> None:
+# (flags, SolveSettings field, argparse keywords, help); the defaults come from SolveSettings
+SOLVER_OPTIONS = [
+    ("--method", "method", {"choices": METHODS}, "progressive refinement or the hemi-cube method"),
+    ("--patch-size", "patch_size", {"type": float, "metavar": "S"},
+     "split surfaces into patches about S scene units (metres) across, small ones staying whole"),
+    ("--subdiv", "subdiv", {"type": int, "metavar": "N"},
+     "split every surface N x N into patches instead, however big or small"),
+    ("--elements", "elements", {"type": int, "metavar": "S"}, "S x S elements per patch, a power of two (progressive)"),
+    ("--hemicube-res", "hemicube_res", {"type": int, "metavar": "R"}, "hemi-cube top-face resolution in pixels"),
+    ("--solver", "solver", {"choices": SOLVERS}, "linear solver of the hemi-cube method"),
+    ("--tolerance", "tolerance", {"type": float, "metavar": "T"},
+     "hemicube: max change relative to max B (1e-5 when not given); progressive: unshot power relative to"
+     " emitted power (1e-3)"),
+    ("--max-iterations", "max_iterations", {"type": int}, "iteration cap of the linear solvers"),
+    ("--max-shots", "max_shots", {"type": int}, "shot budget of the progressive method"),
+    ("--visibility", "visibility", {"choices": VISIBILITY_VARIANTS},
+     "progressive visibility variant: plain projection, tessellated, tessellated with neighbour search, or"
+     " search guarded against peeking past occluders"),
+    ("--visibility-res", "visibility_res", {"type": int, "metavar": "R"},
+     "pixels across the progressive visibility map"),
+    ("--shoot-from", "shoot_from", {"choices": SHOOTING_POINTS},
+     "progressive: render each shooter's visibility map from the centroid of its unshot power or its centre"),
+    ("--kernel", "kernel", {"choices": KERNELS},
+     "progressive form-factor kernel: exact point-to-polygon or the disk approximation"),
+]
+
+
+def add_solver_options(parser: argparse.ArgumentParser, defaults_from_file: bool = False) -> None:
+    """The solver options. With `defaults_from_file` (bake), an option not given leaves the .blend's
+    own setting (or the shared default) in place: it is left out of the parsed arguments."""
     defaults = SolveSettings()
     group = parser.add_argument_group("solver")
-    group.add_argument("--method", choices=METHODS, default=defaults.method,
-                       help="progressive refinement (default) or the original hemi-cube method")
-    group.add_argument("--subdiv", type=int, default=defaults.subdiv, metavar="N",
-                       help=f"split each surface N x N into patches (default {defaults.subdiv})")
-    group.add_argument("--elements", type=int, default=defaults.elements, metavar="S",
-                       help=f"S x S elements per patch, a power of two (progressive; default {defaults.elements})")
-    group.add_argument("--hemicube-res", type=int, default=defaults.hemicube_res, metavar="R",
-                       help=f"hemi-cube top-face resolution in pixels (default {defaults.hemicube_res})")
-    group.add_argument("--solver", choices=SOLVERS, default=defaults.solver,
-                       help="linear solver of the hemi-cube method (default jacobi-gpu)")
-    group.add_argument("--tolerance", type=float, default=None, metavar="T",
-                       help="hemicube: max change relative to max B (default 1e-5); progressive: unshot"
-                            " power relative to emitted power (default 1e-3)")
-    group.add_argument("--max-iterations", type=int, default=defaults.max_iterations,
-                       help="iteration cap of the linear solvers")
-    group.add_argument("--max-shots", type=int, default=None, help="shot budget of the progressive method")
-    group.add_argument("--visibility", choices=VISIBILITY_VARIANTS, default=defaults.visibility,
-                       help="progressive visibility variant: plain projection, tessellated, tessellated with"
-                            " neighbour search (default), or search guarded against peeking past occluders")
-    group.add_argument("--visibility-res", type=int, default=defaults.visibility_res, metavar="R",
-                       help=f"pixels across the progressive visibility map (default {defaults.visibility_res})")
-    group.add_argument("--shoot-from", choices=("centroid", "centre"), default=defaults.shoot_from,
-                       help="progressive: render each shooter's visibility map from the centroid of its unshot"
-                            " power (default) or from its centre")
-    group.add_argument("--kernel", choices=("exact", "disk"), default=defaults.kernel,
-                       help="progressive form-factor kernel: exact point-to-polygon (default) or the disk"
-                            " approximation")
+    for flag, field, keywords, text in SOLVER_OPTIONS:
+        default = getattr(defaults, field)
+        if defaults_from_file:
+            keywords = {**keywords, "default": argparse.SUPPRESS}
+            text += " (default: the file's setting)"
+        else:
+            keywords = {**keywords, "default": default}
+            text += f" (default {default:g})" if isinstance(default, float) else (
+                f" (default {default})" if default is not None else "")
+        group.add_argument(flag, dest=field, help=text, **keywords)
     group.add_argument("--no-skips", dest="skip_unneeded", action="store_false",
+                       default=argparse.SUPPRESS if defaults_from_file else True,
                        help="simulate every effect even when the scene analysis shows it is absent")
 
 
+def given_solver_options(args) -> dict:
+    """SolveSettings fields given on the command line (all of them for `solve`)."""
+    fields = [field for _, field, _, _ in SOLVER_OPTIONS] + ["skip_unneeded"]
+    given = {field: getattr(args, field) for field in fields if hasattr(args, field)}
+    if given.get("subdiv") is None and "patch_size" in given:
+        given["subdiv"] = None  # --patch-size chooses the size mode
+    return given
+
+
 def settings_from_args(args) -> SolveSettings:
-    return SolveSettings(
-        method=args.method, subdiv=args.subdiv, elements=args.elements, hemicube_res=args.hemicube_res,
-        solver=args.solver, tolerance=args.tolerance, max_iterations=args.max_iterations,
-        max_shots=args.max_shots, visibility=args.visibility, kernel=args.kernel,
-        visibility_res=args.visibility_res, shoot_from=args.shoot_from, skip_unneeded=args.skip_unneeded,
-    )
+    return SolveSettings(**given_solver_options(args))
 
 
 class ProgressLine:
@@ -105,15 +118,12 @@ def check_image_options(args) -> None:
         raise SolveError(f"--exposure must be positive, got {args.exposure}")
 
 
-def write_lightmaps_and_preview(args, scene, solution, ctx) -> None:
+def write_lightmaps_and_preview(args, scene, solution, gpu) -> None:
     """`solve --lightmaps DIR` / `--preview OUT.png`: bake the lightmaps, write them and the picture."""
     import numpy as np
 
-    from .core.lightmap import bake_lightmaps
-    from .core.preview import render_preview, save_preview
-
-    lightmaps = bake_lightmaps(scene, solution, texel_density=args.texel_density,
-                               max_size=args.max_lightmap_size, ctx=ctx)
+    lightmaps = core.bake_lightmaps(scene, solution, LightmapSettings(texel_density=args.texel_density,
+                                                                      max_size=args.max_lightmap_size), gpu=gpu)
     if args.lightmaps:
         directory = Path(args.lightmaps)
         directory.mkdir(parents=True, exist_ok=True)
@@ -122,8 +132,8 @@ def write_lightmaps_and_preview(args, scene, solution, ctx) -> None:
         sizes = ", ".join(f"{name} {lm.size[0]}x{lm.size[1]}" for name, lm in lightmaps.items())
         print(f"lightmaps ({args.texel_density:g} texels/unit): {sizes} -> {directory}/")
     if args.preview:
-        preview = render_preview(scene, lightmaps, width=args.preview_size, height=args.preview_size, ctx=ctx)
-        exposure = save_preview(args.preview, scene, preview, exposure=args.exposure)
+        preview = core.render_preview(scene, lightmaps, width=args.preview_size, height=args.preview_size, gpu=gpu)
+        exposure = core.save_preview(args.preview, scene, preview, exposure=args.exposure)
         print(f"preview (exposure {exposure:.3g}) -> {args.preview}")
 
 
@@ -135,20 +145,17 @@ def safe_file_name(name: str) -> str:
 def command_solve(args) -> int:
     import numpy as np
 
-    from .core.scene import load_scene
-    from .core.solve import solve
-
-    scene = load_scene(args.scene)
+    scene = core.load_scene(args.scene)
     settings = settings_from_args(args)
     wants_images = bool(args.lightmaps or args.preview)
     if wants_images:
         check_image_options(args)
-    with gl_context() if wants_images else contextlib.nullcontext() as ctx:
-        solution = solve(scene, settings, progress=print_progress(args.quiet), ctx=ctx)
+    with core.open_gpu() as gpu:
+        solution = core.solve(scene, settings, progress=print_progress(args.quiet), gpu=gpu)
         PROGRESS.end()
         if wants_images:
-            write_lightmaps_and_preview(args, scene, solution, ctx)
-    report = solution.report
+            write_lightmaps_and_preview(args, scene, solution, gpu)
+    report = solution.report.to_dict()
     if args.output:
         Path(args.output).parent.mkdir(parents=True, exist_ok=True)
         np.savez_compressed(args.output, **solution.npz_arrays())
@@ -166,19 +173,20 @@ def write_report(report: dict, path: str | None) -> None:
 
 
 def command_bake(args) -> int:
-    try:
-        import bpy  # noqa: F401  (the Blender module; only this command needs it)
-    except ImportError:
+    import importlib.util
+
+    if importlib.util.find_spec("bpy") is None:  # the Blender module: only this command needs it
         raise SolveError("the bake command needs the Blender Python module: pip install bpy==5.0.1"
                          " (Python 3.11), or run it inside Blender (see the README)") from None
-    from .blender.headless import bake_file
+    from .blender.headless import HeadlessBake, bake_file
 
     progress = print_progress(args.quiet)
-    summary, report = bake_file(args.file, settings_from_args(args), objects=args.objects, output_dir=args.output_dir,
-                        save_as=args.save_as, preview=args.preview, texel_density=args.texel_density,
-                        max_resolution=args.max_lightmap_size, preview_size=args.preview_size,
-                        patch_size=args.patch_size,
-                        progress=(lambda p: progress(p.fraction, p.message, {})) if progress else None)
+    lightmap_options = {field: getattr(args, field) for field in ("texel_density", "max_size")
+                        if getattr(args, field, None) is not None}
+    request = HeadlessBake(file=args.file, solve_options=given_solver_options(args), lightmap_options=lightmap_options,
+                           objects=args.objects, output_dir=args.output_dir, save_as=args.save_as,
+                           preview=args.preview, preview_size=args.preview_size)
+    summary, report = bake_file(request, progress=(lambda p: progress(p.fraction, p.message, {})) if progress else None)
     PROGRESS.end()
     write_report(report, args.report)
     print(summary)
@@ -210,8 +218,8 @@ def build_parser() -> argparse.ArgumentParser:
                              " linear radiance, alpha = coverage, row 0 at v = 0")
     images.add_argument("--texel-density", type=float, default=TEXEL_DENSITY, metavar="D",
                         help=f"lightmap texels per scene unit (default {TEXEL_DENSITY:g})")
-    images.add_argument("--max-lightmap-size", type=int, default=MAX_SIZE, metavar="N",
-                        help=f"cap on a lightmap's width and height (default {MAX_SIZE})")
+    images.add_argument("--max-lightmap-size", type=int, default=MAX_LIGHTMAP_SIZE, metavar="N",
+                        help=f"cap on a lightmap's width and height (default {MAX_LIGHTMAP_SIZE})")
     images.add_argument("--preview", metavar="OUT.png",
                         help="render the scene with its lightmaps from its camera into a PNG")
     images.add_argument("--preview-size", type=int, default=512, metavar="N",
@@ -228,17 +236,15 @@ def build_parser() -> argparse.ArgumentParser:
                              help="save the file with the lightmaps applied (packed unless --output-dir)")
     bake_parser.add_argument("--preview", metavar="OUT.png",
                              help="render the baked file from its camera (Cycles, CPU, a few samples)")
-    bake_parser.add_argument("--patch-size", type=float, metavar="S",
-                             help="split faces into patches about S metres across, small faces staying whole"
-                                  " (instead of --subdiv's N x N for every face)")
     bake_parser.add_argument("--preview-size", type=int, default=256, metavar="N",
                              help="longer side of the preview in pixels, at most the file's render size"
                                   " (default 256)")
     bake_parser.add_argument("--texel-density", type=float, metavar="D",
-                             help="lightmap texels per metre (default: the file's setting, 64)")
+                             help=f"lightmap texels per metre (default: the file's setting, {TEXEL_DENSITY:g} in a new file)")
     bake_parser.add_argument("--report", metavar="REPORT.json", help="write the solve's timings/effects report")
-    bake_parser.add_argument("--max-lightmap-size", type=int, metavar="PX", help="largest lightmap side")
-    add_solver_options(bake_parser)
+    bake_parser.add_argument("--max-lightmap-size", dest="max_size", type=int, metavar="PX",
+                             help=f"largest lightmap side (default: the file's setting, {MAX_LIGHTMAP_SIZE} in a new file)")
+    add_solver_options(bake_parser, defaults_from_file=True)
     bake_parser.add_argument("--quiet", action="store_true", help="no progress line")
     bake_parser.set_defaults(handler=command_bake)
 

@@ -2,11 +2,12 @@
 // Sums the delta form factors of the pixels that show each patch: row i of F
 // for every hemi-cube tile of the batch. Weights are fixed point (2^31 = 1) so
 // integer atomics make the sums exact and order-independent.
+#include "bindings"
 layout(local_size_x = 16, local_size_y = 16, local_size_z = 1) in;
 
-uniform usampler2D item_buffer;
-layout(std430, binding = 1) readonly buffer DeltaFormFactors { uint delta_form_factor[]; };
-layout(std430, binding = 2) buffer Rows { uint row[]; };
+layout(binding = TEXTURE_ITEM_BUFFER) uniform usampler2D item_buffer;
+layout(std430, binding = STORAGE_DELTA_FORM_FACTORS) readonly buffer DeltaFormFactors { uint delta_form_factor[]; };
+layout(std430, binding = STORAGE_FORM_FACTOR_ROWS) buffer Rows { uint row[]; };
 
 uniform ivec2 tile_size;
 uniform int tiles_per_row;

@@ -10,6 +10,7 @@
 // look small from the eye (SEGMENT_ANGLE radians each at most).
 // Rows of the grid are shared among INVOCATIONS geometry shader invocations
 // so that the output of each stays within portable limits.
+#include "bilinear"
 layout(lines_adjacency, invocations = INVOCATIONS) in;
 layout(triangle_strip, max_vertices = MAX_VERTICES) out;
 
@@ -30,8 +31,7 @@ out float distance;   // from the eye, for the lookup's occluder test
 out float gl_ClipDistance[1];
 
 vec3 corner(float s, float t) {
-    return v_position[0] * (1.0 - s) * (1.0 - t) + v_position[1] * s * (1.0 - t)
-         + v_position[2] * s * t + v_position[3] * (1.0 - s) * t;
+    return bilinear_point(v_position[0], v_position[1], v_position[2], v_position[3], s, t);
 }
 
 void emit(vec3 position, uint id) {

@@ -5,14 +5,15 @@
 // clamped and their writes land in a padding slot). Each invocation also folds
 // its largest change and largest value into two atomics (float bits of
 // non-negative numbers order like unsigned integers), read back every k sweeps.
+#include "bindings"
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer FormFactors { float form_factor[]; };
-layout(std430, binding = 1) readonly buffer Emission { vec4 emission[]; };
-layout(std430, binding = 2) readonly buffer Reflectance { vec4 reflectance[]; };
-layout(std430, binding = 3) readonly buffer Old { vec4 radiosity_old[]; };
-layout(std430, binding = 4) writeonly buffer New { vec4 radiosity_new[]; };
-layout(std430, binding = 5) buffer Convergence { uint max_change_bits; uint max_value_bits; };
+layout(std430, binding = STORAGE_FORM_FACTORS) readonly buffer FormFactors { float form_factor[]; };
+layout(std430, binding = STORAGE_JACOBI_EMISSION) readonly buffer Emission { vec4 emission[]; };
+layout(std430, binding = STORAGE_JACOBI_REFLECTANCE) readonly buffer Reflectance { vec4 reflectance[]; };
+layout(std430, binding = STORAGE_RADIOSITY_OLD) readonly buffer Old { vec4 radiosity_old[]; };
+layout(std430, binding = STORAGE_RADIOSITY_NEW) writeonly buffer New { vec4 radiosity_new[]; };
+layout(std430, binding = STORAGE_CONVERGENCE) buffer Convergence { uint max_change_bits; uint max_value_bits; };
 
 uniform int patch_count;
 

@@ -9,12 +9,14 @@
 // points whose values were averaged with the neighbouring patches (CPU side),
 // which makes the map continuous across shared edges.
 
+#include "bindings"
+
 flat in int patch_id;
 
 uniform int elements;  // S: elements per patch side (1 for one value per patch)
 
-layout(std430, binding = 0) readonly buffer PatchCorners { vec4 corners[]; };  // 2 per patch: c0 c1, c2 c3 (texels)
-layout(std430, binding = 1) readonly buffer Lattice { vec4 lattice[]; };       // (S+2)^2 per patch, rows of t
+layout(std430, binding = STORAGE_LATTICE_CORNERS) readonly buffer PatchCorners { vec4 corners[]; };  // 2 per patch: c0 c1, c2 c3 (texels)
+layout(std430, binding = STORAGE_LATTICE_VALUES) readonly buffer Lattice { vec4 lattice[]; };  // (S+2)^2 per patch, rows of t
 
 layout(location = 0) out vec4 out_radiance;  // rgb, 1
 layout(location = 1) out int out_patch;      // patch + 1 if the centre is inside, -(patch + 1) if only touched

@@ -8,17 +8,18 @@
 //   visibility map is rendered from: a patch half hidden under a box then
 //   shoots from its lit part), and the energy sums of the previous shot
 //   (which it resets).
+#include "bindings"
 layout(local_size_x = 256) in;
 
-uniform sampler2D residual;
+layout(binding = TEXTURE_RESIDUAL) uniform sampler2D residual;
 uniform int level;
 uniform int patch_count;
 uniform int tiles_per_row;
 uniform int elements;  // S
 
-layout(std430, binding = 1) readonly buffer Patch { vec4 normal_area[]; };
-layout(std430, binding = 4) buffer Energy { uint energy[4]; };
-layout(std430, binding = 6) writeonly buffer Result {
+layout(std430, binding = STORAGE_PATCH_NORMAL_AREA) readonly buffer Patch { vec4 normal_area[]; };
+layout(std430, binding = STORAGE_SHOT_ENERGY) buffer Energy { uint energy[4]; };
+layout(std430, binding = STORAGE_SELECTION) writeonly buffer Result {  // read back as selection.SELECTION_DTYPE
     vec4 best;          // power score, patch index (as float bits), power centroid s, t
     vec4 best_residual; // mean residual radiosity of the best patch
     vec4 unshot;        // total unshot power per channel
@@ -28,8 +29,6 @@ layout(std430, binding = 6) writeonly buffer Result {
 shared float best_score[256];
 shared int best_index[256];
 shared vec3 total[256];
-
-const float ENERGY_ONE = 1073741824.0;  // 2^30, fixed point of the shot sums
 
 void main() {
     int id = int(gl_LocalInvocationID.x);
@@ -77,7 +76,7 @@ void main() {
         best = vec4(best_score[0], intBitsToFloat(best_index[0]), st);
         best_residual = texelFetch(residual, ivec2(p % tiles_per_row, p / tiles_per_row), level);
         unshot = vec4(total[0], 0.0);
-        last_shot = vec4(energy[0], energy[1], energy[2], energy[3]) / ENERGY_ONE;
+        last_shot = vec4(energy[0], energy[1], energy[2], energy[3]) / SHOT_ENERGY_ONE;
         energy[0] = 0u;
         energy[1] = 0u;
         energy[2] = 0u;

@@ -20,25 +20,28 @@
 // orthographic item buffer; the sky (kind 3) F = each element's unoccluded
 // cosine-weighted fraction of its hemisphere (shooter_radiosity: the world colour).
 //
-// Defines: IMAGE_FORMAT, ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN, RECORD_VISIBILITY,
+// Defines: ELEMENT_FORMAT, ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN, RECORD_VISIBILITY,
 // OCCLUSION (0: the scene analysis proved nothing occludes, V = 1 for facing receivers),
 // INTERREFLECTION (0: nothing a receiver reflects can reach a reflector, so no residual).
+#include "bindings"
+#include "constants"
+#include "bilinear"
 layout(local_size_x = 64) in;
 
-layout(IMAGE_FORMAT, binding = 0) uniform image2D radiosity;  // rgba32f, or r32f for a grey scene
-layout(IMAGE_FORMAT, binding = 1) uniform image2D residual;
-uniform usampler2D item_buffer;
-uniform sampler2D distance_map;     // distance from the eye of what each item texel shows (0: nothing)
+layout(ELEMENT_FORMAT, binding = IMAGE_RADIOSITY) uniform image2D radiosity;  // rgba32f, or r32f for a grey scene
+layout(ELEMENT_FORMAT, binding = IMAGE_RESIDUAL) uniform image2D residual;
+layout(binding = TEXTURE_ITEM_BUFFER) uniform usampler2D item_buffer;
+layout(binding = TEXTURE_DISTANCE_MAP) uniform sampler2D distance_map;  // distance from the eye of what each item texel shows (0: nothing)
 
-layout(std430, binding = 0) readonly buffer Corners { vec4 corner[]; };        // 4 per patch
-layout(std430, binding = 1) readonly buffer Patch { vec4 normal_area[]; };     // normal, area
-layout(std430, binding = 2) readonly buffer Reflectance { vec4 reflectance[]; };
-layout(std430, binding = 3) readonly buffer ElementWeight { float element_weight[]; };  // a_e S^2 / A
-layout(std430, binding = 4) buffer Energy { uint energy[4]; };
-layout(std430, binding = 7) readonly buffer Plane { int plane_of[]; };  // patches of one planar surface share it
-layout(std430, binding = 8) readonly buffer Sky { float sky_fraction[]; };  // per element (kind 3)
+layout(std430, binding = STORAGE_PATCH_CORNERS) readonly buffer Corners { vec4 corner[]; };  // 4 per patch
+layout(std430, binding = STORAGE_PATCH_NORMAL_AREA) readonly buffer Patch { vec4 normal_area[]; };  // normal, area
+layout(std430, binding = STORAGE_PATCH_REFLECTANCE) readonly buffer Reflectance { vec4 reflectance[]; };
+layout(std430, binding = STORAGE_ELEMENT_WEIGHTS) readonly buffer ElementWeight { float element_weight[]; };  // a_e S^2 / A
+layout(std430, binding = STORAGE_SHOT_ENERGY) buffer Energy { uint energy[4]; };
+layout(std430, binding = STORAGE_PATCH_PLANE) readonly buffer Plane { int plane_of[]; };  // patches of one planar surface share it
+layout(std430, binding = STORAGE_SKY_FRACTION) readonly buffer Sky { float sky_fraction[]; };  // per element (kind 3)
 #if RECORD_VISIBILITY
-layout(std430, binding = 5) writeonly buffer Visibility { float visibility_out[]; };
+layout(std430, binding = STORAGE_RECORDED_VISIBILITY) writeonly buffer Visibility { float visibility_out[]; };
 #endif
 
 uniform int patch_count;
@@ -59,9 +62,6 @@ uniform vec3 light_direction;       // spot axis, or the sun's travel direction
 uniform float spot_cos_half;        // cosine of half the spot cone (-1: all around)
 uniform float spot_smooth;          // (1 - spot_cos_half) * blend: width of the soft edge
 uniform float ortho_extent;         // > 0: the item buffer is orthographic over this half-width
-
-const float PI = 3.14159265358979;
-const float ENERGY_ONE = 1073741824.0;  // 2^30
 
 shared vec4 partial[64];
 
@@ -186,8 +186,8 @@ void main() {
         } else {
             float s = (float(i) + 0.5) / float(ELEMENTS);
             float t = (float(j) + 0.5) / float(ELEMENTS);
-            vec3 x = corner[4 * p].xyz * (1.0 - s) * (1.0 - t) + corner[4 * p + 1].xyz * s * (1.0 - t)
-                   + corner[4 * p + 2].xyz * s * t + corner[4 * p + 3].xyz * (1.0 - s) * t;
+            vec3 x = bilinear_point(corner[4 * p].xyz, corner[4 * p + 1].xyz, corner[4 * p + 2].xyz,
+                                    corner[4 * p + 3].xyz, s, t);
             vec3 n = normal_area[p].xyz;
             // the sky's visibility is already in each element's sky fraction
             float v = shooter_kind == 3 ? 1.0 : visibility(x, n, p);
@@ -245,7 +245,7 @@ void main() {
         barrier();
     }
     if (id == 0 && partial[0].x > 0.0) {
-        uvec4 fixed_point = uvec4(round(partial[0] * ENERGY_ONE));
+        uvec4 fixed_point = uvec4(round(partial[0] * SHOT_ENERGY_ONE));
         atomicAdd(energy[0], fixed_point.x);
         atomicAdd(energy[1], fixed_point.y);
         atomicAdd(energy[2], fixed_point.z);

@@ -1,11 +1,10 @@
 import pytest
 
-from radiosity_addon.core import gl
+from radiosity_addon.core import GPU
 
 
 @pytest.fixture(scope="session")
-def ctx():
-    """One OpenGL context for the whole session (creating one costs ~0.1 s on llvmpipe)."""
-    context = gl.create_context()
-    yield context
-    context.release()
+def gpu():
+    """One OpenGL context, with its program cache, for the whole session (the only GL fixture)."""
+    with GPU() as session_gpu:
+        yield session_gpu

@@ -1,4 +1,4 @@
-"""Small analytic scenes for tests (scene dicts in the JSON format of DESIGN.md)."""
+"""Small analytic scenes for tests (scene dicts in the JSON format of docs/architecture.md)."""
 
 from __future__ import annotations
 

@@ -8,8 +8,8 @@ import pytest
 
 from radiosity_addon.bench import metrics, scenes, texels
 from radiosity_addon.cli import build_parser
-from radiosity_addon.core.patches import subdivide
-from radiosity_addon.core.scene import load_scene, scene_from_dict
+from radiosity_addon.core import subdivide
+from radiosity_addon.core import load_scene, scene_from_dict
 
 
 def test_exact_plates_answer_matches_the_opposed_squares_oracle():
@@ -58,7 +58,7 @@ def test_bench_command_is_wired():
 
 @pytest.mark.skipif(importlib.util.find_spec("bpy") is None, reason="needs the bpy module")
 def test_cycles_bake_lands_on_the_grid_in_radiosity_units():
-    from radiosity_addon.blender.cycles_reference import bake_scene
+    from radiosity_addon.bench.cycles import bake_scene
 
     # a small emitter over one corner of the receiver: light that a flipped or transposed grid
     # would move elsewhere

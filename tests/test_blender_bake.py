@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from radiosity_addon.blender.bake import bake_blocking
-from radiosity_addon.core.solution import SolveCancelled
+from radiosity_addon.core import SolveCancelled
 
 
 def bake():
@@ -88,7 +88,7 @@ def test_cancel_leaves_the_file_unchanged():
     context = support.open_blend(support.CORNELL)
     before = support.blend_state()
     with pytest.raises(SolveCancelled):
-        bake_blocking(context, context.scene.radiosity, should_cancel=lambda: True)
+        bake_blocking(context, context.scene.radiosity.bake_options(context.selected_objects), should_cancel=lambda: True)
     assert support.blend_state() == before
 
 
@@ -142,7 +142,7 @@ def test_nan_vertices_are_refused_unchanged():
 def test_failure_after_the_solve_leaves_the_file_unchanged(monkeypatch):
     """An error in the worker (here: the lightmap stage) rolls back the UV maps made for the bake."""
     from radiosity_addon.blender import worker
-    from radiosity_addon.core.solution import SolveError
+    from radiosity_addon.core import SolveError
 
     def broken(*args, **kwargs):
         raise SolveError("simulated lightmap failure")
@@ -175,13 +175,12 @@ def test_exr_output_of_an_unsaved_file_is_refused_unchanged():
 
 
 def test_missing_opengl_is_one_line_and_leaves_the_file_unchanged(monkeypatch):
-    from radiosity_addon.blender import worker
-    from radiosity_addon.core.gl import GLUnavailable
+    from radiosity_addon.core import GLUnavailable
 
     def no_gl():
         raise GLUnavailable("cannot create an OpenGL 4.3 context (simulated)")
 
-    monkeypatch.setattr(worker.gl, "create_context", no_gl)
+    monkeypatch.setattr("radiosity_addon.core.gpu.resources.create_context", no_gl)
     support.open_blend(support.CORNELL)
     refused("OpenGL 4.3")
 

@@ -1,4 +1,4 @@
-"""The baked Cornell sample agrees with Cycles baking the same file (DESIGN.md: the units match).
+"""The baked Cornell sample agrees with Cycles baking the same file (docs/architecture.md: the units match).
 
 Cycles bakes Combined into the same 'Lightmap' UV maps at the same resolution; both
 are compared on the texels both cover. Two differences of Cycles are switched off
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import blender_support as support
 import bpy
-import numpy as np
 
+from radiosity_addon.bench.cycles import bake_object
 from radiosity_addon.blender.tags import CREATED_UV
 
 TOLERANCE = 0.10  # per object and channel, relative to Cycles' mean
@@ -30,20 +30,6 @@ def front_only_emission(material) -> None:
     strength.inputs[0].default_value = principled.inputs["Emission Strength"].default_value
     tree.links.new(front.outputs[0], strength.inputs[1])
     tree.links.new(strength.outputs[0], principled.inputs["Emission Strength"])
-
-
-def cycles_bake(obj, width: int, height: int, samples: int) -> np.ndarray:
-    image = bpy.data.images.new(f"cycles {obj.name}", width, height, alpha=True, float_buffer=True)
-    image.pixels.foreach_set(np.zeros(width * height * 4, dtype=np.float32))
-    for slot in obj.material_slots:
-        tree = slot.material.node_tree
-        target = tree.nodes.get("cycles bake target") or tree.nodes.new("ShaderNodeTexImage")
-        target.name = "cycles bake target"
-        target.image = image
-        tree.nodes.active = target
-    support.select_only([obj])
-    bpy.ops.object.bake(type="COMBINED", uv_layer="Lightmap", margin=0, use_clear=False)
-    return support.image_rgba(image)
 
 
 def test_cornell_lightmaps_agree_with_cycles_within_ten_percent_per_object():
@@ -69,7 +55,7 @@ def test_cornell_lightmaps_agree_with_cycles_within_ten_percent_per_object():
     failures = []
     for obj in objects:
         baked = ours[obj.name]
-        reference = cycles_bake(obj, baked.shape[1], baked.shape[0], cycles.samples)
+        reference = bake_object(obj, baked.shape[1], baked.shape[0], cycles.samples)
         both = (baked[..., 3] > 0.5) & (reference[..., 3] > 0.5)
         assert both.sum() > 0.3 * (baked[..., 3] > 0.5).sum(), f"{obj.name}: coverage differs"
         mean_ours = baked[..., :3][both].mean(axis=0)

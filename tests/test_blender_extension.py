@@ -42,7 +42,9 @@ def test_extension_builds_validates_installs_and_bakes(tmp_path):
     assert "blender_manifest.toml" in names and "__init__.py" in names
     assert any(n.startswith("shaders/") and n.endswith(".comp") for n in names)
     assert sum(n.startswith("wheels/moderngl-") for n in names) == 2  # cp311 and cp313
-    assert not any(n.startswith(("tests/", "sample_blends/", "tools/", "docs/", ".")) or "__pycache__" in n for n in names)
+    assert not any(n.startswith(("tests/", "sample_blends/", "tools/", "docs/", ".", "radiosity_addon/bench/"))
+                   or "__pycache__" in n for n in names)  # only what users need ships
+    assert any(n.startswith("shaders/include/") for n in names)
     assert not any(n.startswith("wheels/numpy") for n in names)
 
     user = tmp_path / "blender-user"

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from radiosity_addon.blender.worker import filled_image
+from radiosity_addon.core.lightmap import filled_image
 
 
 def mip_levels(values, covered, count):

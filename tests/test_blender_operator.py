@@ -32,11 +32,24 @@ class FakeWindowManager:
         pass
 
 
-def test_escape_in_the_modal_loop_cancels_and_leaves_the_file_unchanged():
+def solve_until_cancelled(scene, settings, progress=None, should_cancel=None, gpu=None):
+    """A solve that reports progress and then runs until it is cancelled: Esc always arrives in time."""
+    from radiosity_addon.core import SolveCancelled
+
+    progress(0.25, "waiting for Esc", {})
+    deadline = time.monotonic() + 60
+    while not should_cancel():
+        assert time.monotonic() < deadline, "Esc never reached the solve"
+        time.sleep(0.01)
+    raise SolveCancelled("cancelled")
+
+
+def test_escape_in_the_modal_loop_cancels_and_leaves_the_file_unchanged(monkeypatch):
     """Drive RADIOSITY_OT_bake.modal as Blender's event loop would: timer ticks, then Esc."""
+    monkeypatch.setattr("radiosity_addon.core.solve", solve_until_cancelled)
     context = support.open_blend(support.CORNELL, method="progressive", subdivision=4)
     before = support.blend_state()
-    plan = prepare(context, context.scene.radiosity)
+    plan = prepare(context, context.scene.radiosity.bake_options(context.selected_objects))
     assert support.blend_state() != before  # prepare made the Lightmap UV maps
     operators.running = plan
     plan.worker.start()
@@ -49,10 +62,10 @@ def test_escape_in_the_modal_loop_cancels_and_leaves_the_file_unchanged():
     tick = SimpleNamespace(type="TIMER", value="NOTHING")
     escape = SimpleNamespace(type="ESC", value="PRESS")
     try:
-        while not plan.worker.snapshot().fraction > 0 and not plan.worker.done:
+        while not plan.worker.snapshot().fraction > 0:
             assert operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, tick) == {"RUNNING_MODAL"}
             time.sleep(0.05)
-        assert not plan.worker.done, "the solve ended before Esc could be pressed"
+        assert operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, tick) == {"RUNNING_MODAL"}
         assert any("Esc cancels" in (line or "") for line in status)
         result = operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, escape)
         deadline = time.monotonic() + 60
@@ -194,35 +207,34 @@ def test_panel_draws_the_settings_of_the_chosen_method_and_the_bake_button(metho
 
 
 def test_patch_size_splits_big_faces_and_keeps_small_ones_whole():
+    """The exporter gives the faces as they are; the core's Patch Size mode splits them."""
     from radiosity_addon.blender.export import export_scene
     from radiosity_addon.blender.lightmap_uv import add_lightmap_uvs
+    from radiosity_addon.core import subdivide
 
     context = support.open_blend(support.ROOM)
     objects = [obj for obj in context.scene.objects if obj.type == "MESH"]
-    add_lightmap_uvs(objects, 0.1)
-    depsgraph = context.evaluated_depsgraph_get()
-    whole = export_scene(depsgraph, objects, [], patch_size=0.0).scene
-    split = export_scene(depsgraph, objects, [], patch_size=0.5).scene
+    add_lightmap_uvs(bpy.context, objects, 0.1)
+    scene = export_scene(context.evaluated_depsgraph_get(), objects, []).scene
+    patches = subdivide(scene, None, 0.5)
 
-    def uv_area(surface):
-        x, y = surface.uv[:, 0], surface.uv[:, 1]
-        return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    def uv_area(uv):
+        x, y = uv[..., 0], uv[..., 1]
+        return 0.5 * np.abs((x * np.roll(y, -1, axis=-1) - y * np.roll(x, -1, axis=-1)).sum(axis=-1))
 
-    for name in ("Room", "Table", "Pyramid", "Ceiling Light"):
-        before = [s for s in whole.surfaces if s.object_name == name]
-        after = [s for s in split.surfaces if s.object_name == name]
-        assert np.isclose(sum(s.area for s in after), sum(s.area for s in before), rtol=1e-9), name
-        assert np.isclose(sum(uv_area(s) for s in after), sum(uv_area(s) for s in before), rtol=1e-6), name
-        for surface in after:
-            edges = np.linalg.norm(np.roll(surface.vertices, -1, axis=0) - surface.vertices, axis=1)
-            assert edges.max() <= 0.5 + 1e-9, name
-    room_before = sum(s.object_name == "Room" for s in whole.surfaces)
-    room_after = sum(s.object_name == "Room" for s in split.surfaces)
-    assert room_before == 6 and room_after == 2 * (8 * 6 + 8 * 5 + 6 * 5)  # 4 x 3 x 2.5 m at 0.5 m
-    small = [s for s in whole.surfaces if s.object_name == "Table" and
-             np.linalg.norm(np.roll(s.vertices, -1, axis=0) - s.vertices, axis=1).max() <= 0.5]
-    assert small and all(any(s.vertices.shape == t.vertices.shape and np.allclose(s.vertices, t.vertices)
-                             for t in split.surfaces) for s in small)
+    for name, surfaces in scene.object_surfaces.items():
+        mine = np.isin(patches.surface, surfaces)
+        assert np.isclose(patches.area[mine].sum(), scene.area[surfaces].sum(), rtol=1e-9), name
+        assert np.isclose(uv_area(patches.uv[mine]).sum(), uv_area(scene.uv[surfaces]).sum(), rtol=1e-6), name
+        edges = np.linalg.norm(np.roll(patches.corners[mine], -1, axis=1) - patches.corners[mine], axis=2)
+        assert edges.max() <= 0.5 + 1e-9, name
+    room = scene.object_surfaces["Room"]
+    assert len(room) == 6 and np.isin(patches.surface, room).sum() == 2 * (8 * 6 + 8 * 5 + 6 * 5)  # 4 x 3 x 2.5 m
+    edges = np.linalg.norm(np.roll(scene.corners, -1, axis=1) - scene.corners, axis=2).max(axis=1)
+    small = np.flatnonzero(edges <= 0.5)
+    assert len(small) and np.all(np.bincount(patches.surface, minlength=len(scene))[small] == 1)
+    kept = np.flatnonzero(np.isin(patches.surface, small))
+    assert np.allclose(patches.corners[kept], scene.corners[patches.surface[kept]])
 
 
 def test_patch_size_mode_bakes_through_the_operator():
@@ -250,7 +262,7 @@ def test_mirrored_objects_keep_their_fronts_and_visible_lamps_are_exported():
     lamp = bpy.data.objects.new("Lamp", bpy.data.lights.new("Lamp", "POINT"))
     context.scene.collection.objects.link(lamp)
     support.select_only([bpy.data.objects["Room"]])
-    plan = prepare(context, context.scene.radiosity)
+    plan = prepare(context, context.scene.radiosity.bake_options(context.selected_objects))
     try:
         assert [light["name"] for light in plan.worker.scene.extras["lights"]] == ["Lamp"]
     finally:

@@ -1,15 +1,16 @@
-"""Hemi-cube form factors and the linear solvers against exact references (DESIGN.md oracles)."""
+"""Hemi-cube form factors and the linear solvers against exact references (docs/architecture.md oracles)."""
 
 import numpy as np
 import pytest
 from scenes import (area_weighted_mean, closed_cube, opposed_rectangles_form_factor, opposed_squares,
                     perpendicular_squares)
 
-from radiosity_addon.core import hemicube, linear_solvers
-from radiosity_addon.core.patches import subdivide
-from radiosity_addon.core.scene import scene_from_dict
-from radiosity_addon.core.solution import SolveError, SolveSettings
-from radiosity_addon.core.solve import solve
+from radiosity_addon.core import hemicube, visibility
+from radiosity_addon.core.hemicube import linear_solvers
+from radiosity_addon.core import subdivide
+from radiosity_addon.core import scene_from_dict
+from radiosity_addon.core import SolveError, SolveSettings
+from radiosity_addon.core import solve
 
 SOLVERS = ["jacobi-gpu", "jacobi-cpu", "gauss-seidel"]
 HEMICUBES_AT_256 = SolveSettings(method="hemicube", subdiv=8, hemicube_res=256, skip_unneeded=False)
@@ -23,43 +24,43 @@ def test_opposed_rectangle_formula_matches_design_values():
 
 def test_delta_form_factors_normalized_and_unnormalized_excess():
     resolution = 64
-    raw = hemicube.delta_form_factors(resolution, normalize=False)
-    # DESIGN.md: unnormalized delta form factors sum to about 1 + 0.54 / N^2
+    raw = visibility.delta_form_factors(resolution, normalize=False)
+    # docs/architecture.md: unnormalized delta form factors sum to about 1 + 0.54 / N^2
     assert raw.sum() - 1 == pytest.approx(0.54 / resolution**2, rel=0.1)
-    assert hemicube.delta_form_factors(resolution).sum() == pytest.approx(1.0, abs=1e-12)
-    assert hemicube.fixed_point_weights(hemicube.delta_form_factors(resolution)).sum(dtype=np.int64) == 2**31
+    assert visibility.delta_form_factors(resolution).sum() == pytest.approx(1.0, abs=1e-12)
+    assert visibility.fixed_point_weights(visibility.delta_form_factors(resolution)).sum(dtype=np.int64) == 2**31
 
 
 @pytest.mark.parametrize("distance, exact", [(0.5, 0.415253), (1.0, 0.199825), (2.0, 0.068590)])
-def test_opposed_squares_receiver_radiosity(ctx, distance, exact):
+def test_opposed_squares_receiver_radiosity(gpu, distance, exact):
     scene = scene_from_dict(opposed_squares(distance))
     # skips off: nothing occludes here, so the analysis would use analytic factors instead
-    solution = solve(scene, HEMICUBES_AT_256, ctx=ctx)
-    assert solution.report["effects"]["hemicubes"] == 128
+    solution = solve(scene, HEMICUBES_AT_256, gpu=gpu)
+    assert solution.report.work.hemicubes == 128
     mean = area_weighted_mean(solution, 0)
     np.testing.assert_allclose(mean, 0.5 * exact, rtol=0.03)
 
 
-def test_perpendicular_squares_receiver_radiosity(ctx):
+def test_perpendicular_squares_receiver_radiosity(gpu):
     scene = scene_from_dict(perpendicular_squares())
-    solution = solve(scene, HEMICUBES_AT_256, ctx=ctx)
-    assert solution.report["effects"]["hemicubes"] == 128
+    solution = solve(scene, HEMICUBES_AT_256, gpu=gpu)
+    assert solution.report.work.hemicubes == 128
     np.testing.assert_allclose(area_weighted_mean(solution, 0), 0.5 * 0.200044, rtol=0.04)
 
 
-def test_single_patch_gives_centre_point_factor(ctx):
-    """Unsubdivided, the hemi-cube gives the centre-point factor: +20 % at distance 1 (DESIGN.md)."""
+def test_single_patch_gives_centre_point_factor(gpu):
+    """Unsubdivided, the hemi-cube gives the centre-point factor: +20 % at distance 1 (docs/architecture.md)."""
     scene = scene_from_dict(opposed_squares(1.0))
     patches = subdivide(scene, 1)
-    matrix = hemicube.form_factor_matrix(ctx, patches, 256, scene.diameter)
+    matrix = hemicube.form_factor_matrix(gpu, patches, 256, scene.diameter)
     assert matrix[0, 1] / 0.199825 - 1 == pytest.approx(0.20, abs=0.02)
     assert matrix[0, 0] == 0 and matrix[1, 1] == 0  # a planar patch cannot see itself
 
 
-def test_closed_cube_rows_sum_to_one(ctx):
+def test_closed_cube_rows_sum_to_one(gpu):
     scene = scene_from_dict(closed_cube())
     patches = subdivide(scene, 4)
-    matrix = hemicube.form_factor_matrix(ctx, patches, 64, scene.diameter)
+    matrix = hemicube.form_factor_matrix(gpu, patches, 64, scene.diameter)
     np.testing.assert_allclose(matrix.sum(axis=1), 1.0, atol=1e-3)
     # reciprocity A_i F_ij = A_j F_ji holds approximately (hemi-cube aliasing)
     flux = patches.area[:, None] * matrix
@@ -70,23 +71,23 @@ def test_closed_cube_rows_sum_to_one(ctx):
 @pytest.mark.parametrize("solver", SOLVERS)
 @pytest.mark.parametrize("reflectance", [0.5, 0.9])
 @pytest.mark.parametrize("skip_unneeded", [False, True], ids=["hemicubes", "analysed"])
-def test_furnace(ctx, solver, reflectance, skip_unneeded):
+def test_furnace(gpu, solver, reflectance, skip_unneeded):
     """Closed cube, uniform ρ and E: B = E/(1 − ρ). Analysed, the convex grey cube is solved
     with analytic unoccluded form factors on one channel; with skips off, by hemi-cubes."""
     scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
     settings = SolveSettings(method="hemicube", subdiv=3, hemicube_res=64, solver=solver, tolerance=1e-6,
                              skip_unneeded=skip_unneeded)
-    solution = solve(scene, settings, ctx=ctx)
-    assert solution.report["effects"]["hemicubes"] == (0 if skip_unneeded else 54)
+    solution = solve(scene, settings, gpu=gpu)
+    assert solution.report.work.hemicubes == (0 if skip_unneeded else 54)
     np.testing.assert_allclose(solution.patch_radiosity, 1 / (1 - reflectance), rtol=0.01)
 
 
-def test_solvers_agree_on_cornell_box(ctx):
-    from radiosity_addon.core.scene import load_scene
+def test_solvers_agree_on_cornell_box(gpu):
+    from radiosity_addon.core import load_scene
 
     scene = load_scene("cornell-box")
     results = [solve(scene, SolveSettings(method="hemicube", subdiv=2, hemicube_res=64, solver=s,
-                                          tolerance=1e-7), ctx=ctx).patch_radiosity for s in SOLVERS]
+                                          tolerance=1e-7), gpu=gpu).patch_radiosity for s in SOLVERS]
     scale = results[1].max()
     for other in (results[0], results[2]):
         assert np.abs(other - results[1]).max() / scale < 1e-5
@@ -100,18 +101,18 @@ def two_patch_system():
 
 
 @pytest.mark.parametrize("solver", SOLVERS)
-def test_two_patch_closed_form(ctx, solver):
-    """B1 = (E1 + ρ1 F12 E2)/(1 − ρ1ρ2F12F21), B2 = E2 + ρ2 F21 B1 (DESIGN.md)."""
+def test_two_patch_closed_form(gpu, solver):
+    """B1 = (E1 + ρ1 F12 E2)/(1 − ρ1ρ2F12F21), B2 = E2 + ρ2 F21 B1 (docs/architecture.md)."""
     form_factors, rho, emission = two_patch_system()
     f12, f21 = form_factors[0, 1], form_factors[1, 0]
     b1 = (emission[0] + rho[0] * f12 * emission[1]) / (1 - rho[0] * rho[1] * f12 * f21)
     b2 = emission[1] + rho[1] * f21 * b1
     monitor = linear_solvers.Convergence(solver, 1e-7, 10_000)
-    result = linear_solvers.solve_linear(ctx, solver, form_factors, rho, emission, monitor)
+    result = linear_solvers.solve_linear(gpu, solver, form_factors, rho, emission, monitor)
     np.testing.assert_allclose(result, np.stack([b1, b2]), rtol=1e-5)
 
 
-def test_iteration_cap_is_a_clear_error(ctx):
+def test_iteration_cap_is_a_clear_error(gpu):
     form_factors, rho, emission = two_patch_system()
     monitor = linear_solvers.Convergence("jacobi-cpu", 1e-12, 3)
     with pytest.raises(SolveError, match="did not converge in 3 iterations"):

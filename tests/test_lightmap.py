@@ -11,27 +11,24 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from radiosity_addon import cli
-from radiosity_addon.core import gl
-from radiosity_addon.core.lightmap import (GUTTER, MIN_SIZE, bake_lightmaps, gl_mip_count, lattice_parameters,
-                                           resolve_size)
-from radiosity_addon.core.padding import dilate
-from radiosity_addon.core.patches import bilinear, subdivide
-from radiosity_addon.core.preview import render_preview, save_preview
-from radiosity_addon.core.scene import SceneError, load_scene, scene_from_dict
-from radiosity_addon.core.solution import Solution, SolveError, SolveSettings
-from radiosity_addon.core.solve import solve
+from radiosity_addon import core
+from radiosity_addon.core import (LightmapSettings, SceneError, Solution, SolveError, SolveSettings, bilinear,
+                                  load_scene, scene_from_dict, solve, subdivide)
+from radiosity_addon.core.imaging import dilate
+from radiosity_addon.core.lightmap import gl_mip_count
+from radiosity_addon.core.lightmap.lattice import lattice_parameters
+from radiosity_addon.core.lightmap.size import MIN_SIZE, resolve_size
+from radiosity_addon.core.settings import LIGHTMAP_GUTTER as GUTTER
 
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec. 709
-CORNELL_DENSITY = 128.0  # texels per metre: 7.8 mm texels, the library default
+CORNELL_DENSITY = 128.0  # texels per metre: 7.8 mm texels
 FINE_DENSITY = 256.0  # the demo's density: the smallest Cornell faces (block sides) ~41 texels across
 
 
-@pytest.fixture(scope="module")
-def gl_ctx():
-    context = gl.create_context()
-    yield context
-    context.release()
+def bake_lightmaps(scene, solution, texel_density=CORNELL_DENSITY, gpu=None, objects=None, **settings):
+    """core.bake_lightmaps with this file's defaults (128 texels per metre, up to 2048 texels)."""
+    settings = {"max_size": 2048, **settings}
+    return core.bake_lightmaps(scene, solution, LightmapSettings(texel_density=texel_density, **settings), gpu=gpu,
+                               objects=objects)
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +37,8 @@ def cornell():
 
 
 @pytest.fixture(scope="module")
-def cornell_solution(cornell, gl_ctx):
-    return solve(cornell, SolveSettings(method="hemicube", subdiv=4, hemicube_res=64), ctx=gl_ctx)
+def cornell_solution(cornell, gpu):
+    return solve(cornell, SolveSettings(method="hemicube", subdiv=4, hemicube_res=64), gpu=gpu)
 
 
 def element_geometry(patches, elements: int):
@@ -77,18 +74,18 @@ def smooth_field(centres, group):
 
 
 @pytest.fixture(scope="module")
-def cornell_bakes(cornell, cornell_solution, gl_ctx):
+def cornell_bakes(cornell, cornell_solution, gpu):
     """(name, solution, lightmaps): the hemi-cube solve and a synthetic S = 4 element solution at the
     default density, then both at the demo's density, then the hemi-cube solve at a coarse one."""
     object_of_surface = np.array([cornell.objects.index(s.object_name) for s in cornell.surfaces])
     elements = synthetic_element_solution(cornell, subdiv=3, elements=4,
                                           values=lambda c, surface: smooth_field(c, object_of_surface[surface]))
     return [
-        ("hemicube", cornell_solution, bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, ctx=gl_ctx)),
-        ("elements", elements, bake_lightmaps(cornell, elements, CORNELL_DENSITY, ctx=gl_ctx)),
-        ("hemicube fine", cornell_solution, bake_lightmaps(cornell, cornell_solution, FINE_DENSITY, ctx=gl_ctx)),
-        ("elements fine", elements, bake_lightmaps(cornell, elements, FINE_DENSITY, ctx=gl_ctx)),
-        ("coarse", cornell_solution, bake_lightmaps(cornell, cornell_solution, 24.0, ctx=gl_ctx)),
+        ("hemicube", cornell_solution, bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, gpu=gpu)),
+        ("elements", elements, bake_lightmaps(cornell, elements, CORNELL_DENSITY, gpu=gpu)),
+        ("hemicube fine", cornell_solution, bake_lightmaps(cornell, cornell_solution, FINE_DENSITY, gpu=gpu)),
+        ("elements fine", elements, bake_lightmaps(cornell, elements, FINE_DENSITY, gpu=gpu)),
+        ("coarse", cornell_solution, bake_lightmaps(cornell, cornell_solution, 24.0, gpu=gpu)),
     ]
 
 
@@ -120,7 +117,7 @@ def test_no_uncovered_texel_inside_footprints_or_their_two_texel_gutters(cornell
         for name, lightmap in lightmaps.items():
             centres = texel_centres(lightmap.size)
             covered = lightmap.rgba[..., 3] > 0
-            for index, uv in lightmap.surface_uv.items():
+            for index, uv in zip(lightmap.surfaces, lightmap.surface_uv):
                 polygon = uv * np.asarray(lightmap.size)
                 inside = polygon_distance_at_most(centres, polygon, 0.0)
                 gutter = polygon_distance_at_most(centres, polygon, GUTTER)
@@ -140,7 +137,7 @@ def test_charts_keep_their_gutters_apart(cornell, cornell_bakes):
     for name in ("tall_block", "short_block"):  # five charts each
         lightmap = lightmaps[name]
         surface = np.where(lightmap.patch_index >= 0, solution.patches.surface[lightmap.patch_index], -1)
-        indices = sorted(lightmap.surface_uv)
+        indices = sorted(lightmap.surfaces)
         for a in indices:
             _, grown = dilate(np.zeros(surface.shape + (1,)), surface == a, 2 * GUTTER)
             for b in indices:
@@ -148,14 +145,14 @@ def test_charts_keep_their_gutters_apart(cornell, cornell_bakes):
                     assert not (grown & (surface == b)).any(), f"{name}: charts {a} and {b} too close"
 
 
-def test_thin_faces_still_get_texels(gl_ctx):
+def test_thin_faces_still_get_texels(gpu):
     """A sliver far thinner than a texel in its own chart is not an empty (black) map."""
     scene = scene_from_dict({"surfaces": [
         {"name": "sliver", "vertices": [[0, 0, 0], [1, 0, 0], [1, 0.002, 0]],
          "reflectance": [0.5] * 3, "emission": [1, 1, 1]},
     ]})
     solution = synthetic_element_solution(scene, 2, 2, lambda c, s: np.ones(c.shape))
-    lightmap = bake_lightmaps(scene, solution, texel_density=32, ctx=gl_ctx)["sliver"]
+    lightmap = bake_lightmaps(scene, solution, texel_density=32, gpu=gpu)["sliver"]
     covered = lightmap.rgba[..., 3] > 0
     assert covered.sum() >= 32 and np.allclose(lightmap.rgba[covered][:, :3], 1.0, atol=1e-5)
 
@@ -176,7 +173,7 @@ def test_face_texel_means_match_area_weighted_radiosity(cornell, cornell_bakes):
             values = solution.patch_radiosity[:, None, None, :]
         for name, lightmap in lightmaps.items():
             owner = lightmap.patch_index
-            for index in lightmap.surface_uv:
+            for index in lightmap.surfaces:
                 mine = solution.patches.surface == index
                 expected = (values[mine] * areas[mine][..., None]).sum(axis=(0, 1, 2)) / areas[mine].sum()
                 texels = (owner >= 0) & (solution.patches.surface[np.maximum(owner, 0)] == index)
@@ -194,7 +191,7 @@ TWO_TILES = {"surfaces": [  # two unit quads sharing the edge x = 1, laid side b
 ]}
 
 
-def test_values_are_continuous_across_patch_and_face_borders(gl_ctx):
+def test_values_are_continuous_across_patch_and_face_borders(gpu):
     """The bound: the map is the bilinear interpolant of element centres and border points whose
     values are the mean of both sides, so crossing a border is linear from one element centre
     to the other: the step between the two texels straddling the border equals the step between
@@ -206,7 +203,7 @@ def test_values_are_continuous_across_patch_and_face_borders(gl_ctx):
     rng = np.random.default_rng(4)
     solution = synthetic_element_solution(scene, subdiv=2, elements=4,
                                           values=lambda c, s: rng.uniform(0.1, 1.0, c.shape))
-    lightmap = bake_lightmaps(scene, solution, texel_density=100, ctx=gl_ctx)["tiles"]
+    lightmap = bake_lightmaps(scene, solution, texel_density=100, gpu=gpu)["tiles"]
     assert lightmap.size == (224, 224)  # 100 texels/unit over 0.45 uv per unit: 222 -> multiple of 8
     value, owner = lightmap.rgba[..., :3].astype(np.float64), lightmap.patch_index
     own = own_element_values(solution, lightmap)
@@ -247,7 +244,7 @@ TWO_ISLANDS = {"surfaces": [  # the same two quads, each its own UV island (as B
 ]}
 
 
-def test_values_are_continuous_across_a_flat_edge_between_uv_islands(gl_ctx):
+def test_values_are_continuous_across_a_flat_edge_between_uv_islands(gpu):
     """Each face its own island: the texels nearest the shared edge on either island (half a texel
     from it, edges on texel borders at 200 x 200) differ no more than neighbouring texels allow,
     as across a border inside a chart (see the test above)."""
@@ -255,7 +252,7 @@ def test_values_are_continuous_across_a_flat_edge_between_uv_islands(gl_ctx):
     rng = np.random.default_rng(5)
     solution = synthetic_element_solution(scene, subdiv=2, elements=4,
                                           values=lambda c, s: rng.uniform(0.1, 1.0, c.shape))
-    lightmap = bake_lightmaps(scene, solution, resolution_overrides={"tiles": 200}, ctx=gl_ctx)["tiles"]
+    lightmap = bake_lightmaps(scene, solution, resolution_overrides={"tiles": 200}, gpu=gpu)["tiles"]
     value = lightmap.rgba[..., :3].astype(np.float64)
     rows = np.arange(61, 145)  # v in (0.305, 0.725): inside both islands
     a, a2, b, b2 = value[rows, 95], value[rows, 94], value[rows, 104], value[rows, 105]
@@ -266,7 +263,7 @@ def test_values_are_continuous_across_a_flat_edge_between_uv_islands(gl_ctx):
 
 
 @pytest.mark.parametrize("bend_degrees, averaged", [(90.0, False), (20.0, True)])
-def test_creases_keep_their_own_values_and_smooth_bends_share_them(gl_ctx, bend_degrees, averaged):
+def test_creases_keep_their_own_values_and_smooth_bends_share_them(gpu, bend_degrees, averaged):
     """A floor (value 1) and a wall (value 3) of one object meeting at an edge: at a 90° crease
     each keeps its own value (light really differs there); bent by only 20° they meet halfway."""
     bend = np.radians(bend_degrees)
@@ -278,7 +275,7 @@ def test_creases_keep_their_own_values_and_smooth_bends_share_them(gl_ctx, bend_
          "reflectance": [0.5] * 3, "emission": [0, 0, 0]},
     ]})
     solution = synthetic_element_solution(scene, 2, 2, lambda c, s: np.ones(c.shape) * (1 + 2 * s)[:, None, None, None])
-    lightmap = bake_lightmaps(scene, solution, texel_density=40, ctx=gl_ctx)["bent"]
+    lightmap = bake_lightmaps(scene, solution, texel_density=40, gpu=gpu)["bent"]
     inside = lightmap.patch_index >= 0
     surface = solution.patches.surface[lightmap.patch_index[inside]]
     values = lightmap.rgba[inside][:, 0]
@@ -300,12 +297,12 @@ def covered_mean(rgba, coverage):
     return (rgba[..., :3] * coverage[..., None]).sum(axis=(0, 1)) / coverage.sum()
 
 
-def test_every_mip_level_keeps_the_covered_mean(cornell, cornell_solution, cornell_bakes, gl_ctx):
+def test_every_mip_level_keeps_the_covered_mean(cornell, cornell_solution, cornell_bakes, gpu):
     """Coverage-aware levels: each level's covered mean equals level 0's within 1 %, and gutters
     stay filled at every level. The test would catch a plain box filter of the padded image
     (what generated mipmaps do): past the gutter's reach it pulls chart borders toward black,
     which is checked to move some object's mean by more than 1 %."""
-    power_of_two = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, power_of_two=True, ctx=gl_ctx)
+    power_of_two = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, power_of_two=True, gpu=gpu)
     box_filter_errors = []
     for label, lightmaps in (("hemicube", cornell_bakes[0][2]), ("elements", cornell_bakes[1][2]),
                              ("power of two", power_of_two)):
@@ -334,7 +331,7 @@ def test_every_mip_level_keeps_the_covered_mean(cornell, cornell_solution, corne
 
 # --- resolution --------------------------------------------------------------------------
 
-def test_resolution_follows_density_override_cap_and_power_of_two(cornell, cornell_solution, gl_ctx):
+def test_resolution_follows_density_override_cap_and_power_of_two(cornell, cornell_solution, gpu):
     assert resolve_size((150, 101), None, 2048, False, "x") == (152, 104)
     assert resolve_size((150, 101), None, 2048, True, "x") == (256, 128)
     assert resolve_size((150, 101), None, 100, False, "x") == (100, 100)
@@ -343,98 +340,44 @@ def test_resolution_follows_density_override_cap_and_power_of_two(cornell, corne
     with pytest.raises(SolveError, match="at least"):
         resolve_size((150, 101), MIN_SIZE - 1, 2048, False, "x")
     maps = bake_lightmaps(cornell, cornell_solution, 64.0, resolution_overrides={"floor": 200, "light": (32, 16)},
-                          max_size=128, ctx=gl_ctx)
+                          max_size=128, gpu=gpu)
     assert maps["floor"].size == (128, 128) and maps["light"].size == (32, 16)
     for name in ("back_wall", "tall_block"):  # at least the density asked for; rounding sizes up adds some
         assert 0.98 * 64 < maps[name].texel_density < 1.25 * 64
     with pytest.raises(SolveError, match="no object 'nope'"):
-        bake_lightmaps(cornell, cornell_solution, resolution_overrides={"nope": 64}, ctx=gl_ctx)
+        bake_lightmaps(cornell, cornell_solution, resolution_overrides={"nope": 64}, gpu=gpu)
     with pytest.raises(SolveError, match="do not fit"):  # five charts with their margins need more than 8 x 8
-        bake_lightmaps(cornell, cornell_solution, resolution_overrides={"tall_block": 8}, ctx=gl_ctx)
+        bake_lightmaps(cornell, cornell_solution, resolution_overrides={"tall_block": 8}, gpu=gpu)
 
 
-def test_only_the_objects_asked_for_are_baked(cornell, cornell_solution, gl_ctx):
+def test_only_the_objects_asked_for_are_baked(cornell, cornell_solution, gpu):
     """Objects that only occlude (a Blender bake of selected objects) need no lightmap."""
-    maps = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, objects=["floor", "light"], ctx=gl_ctx)
+    maps = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, objects=["floor", "light"], gpu=gpu)
     assert sorted(maps) == ["floor", "light"]
-    everything = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, ctx=gl_ctx)
+    everything = bake_lightmaps(cornell, cornell_solution, CORNELL_DENSITY, gpu=gpu)
     assert np.array_equal(maps["floor"].rgba, everything["floor"].rgba)
     with pytest.raises(SolveError, match="no object 'nope'"):
-        bake_lightmaps(cornell, cornell_solution, objects=["floor", "nope"], ctx=gl_ctx)
+        bake_lightmaps(cornell, cornell_solution, objects=["floor", "nope"], gpu=gpu)
 
 
-def test_given_uvs_are_used_and_mixed_uvs_refused(gl_ctx):
+def test_given_uvs_are_used_and_mixed_uvs_refused(gpu):
     scene = scene_from_dict(TWO_TILES)
     solution = synthetic_element_solution(scene, 1, 1, lambda c, s: np.ones(c.shape))
-    lightmap = bake_lightmaps(scene, solution, texel_density=100, ctx=gl_ctx)["tiles"]
+    lightmap = bake_lightmaps(scene, solution, texel_density=100, gpu=gpu)["tiles"]
     assert np.allclose(lightmap.surface_uv[1], TWO_TILES["surfaces"][1]["uv"])
     inside = lightmap.patch_index >= 0
     rows, cols = np.nonzero(inside)
     assert abs(cols.min() - 0.05 * 224) <= 1 and abs(cols.max() + 1 - 0.95 * 224) <= 1
     mixed = {"surfaces": [dict(TWO_TILES["surfaces"][0]), {**TWO_TILES["surfaces"][1], "uv": None}]}
     with pytest.raises(SceneError, match="no lightmap 'uv'"):
-        bake_lightmaps(scene_from_dict(mixed), solution, ctx=gl_ctx)
+        bake_lightmaps(scene_from_dict(mixed), solution, gpu=gpu)
 
 
-def test_a_face_collapsed_in_uv_space_leaves_no_nan(gl_ctx):
+def test_a_face_collapsed_in_uv_space_leaves_no_nan(gpu):
     collapsed = {"surfaces": [TWO_TILES["surfaces"][0],
                               {**TWO_TILES["surfaces"][1], "uv": [[0.7, 0.8]] * 4}]}
     scene = scene_from_dict(collapsed)
     solution = synthetic_element_solution(scene, 2, 2, lambda c, s: np.ones(c.shape))
-    lightmap = bake_lightmaps(scene, solution, texel_density=50, ctx=gl_ctx)["tiles"]
+    lightmap = bake_lightmaps(scene, solution, texel_density=50, gpu=gpu)["tiles"]
     assert np.isfinite(lightmap.rgba).all()
     assert np.allclose(lightmap.rgba[lightmap.rgba[..., 3] > 0][:, :3], 1.0, atol=1e-5)
-
-
-# --- preview -------------------------------------------------------------------------------
-
-def test_cornell_preview_shows_colour_bleeding_and_the_light_is_brightest(cornell, cornell_bakes, gl_ctx,
-                                                                           tmp_path):
-    """Measured on the PNG (decoded by matplotlib, not by our writer): on the white back wall,
-    floor and ceiling, the strip next to the red wall is redder than the middle strip and the
-    strip next to the green wall greener; the light's pixels are the brightest surface."""
-    image_module = pytest.importorskip("matplotlib.image")
-    _, _, lightmaps = cornell_bakes[0]
-    preview = render_preview(cornell, lightmaps, width=256, height=256, ctx=gl_ctx)
-    path = tmp_path / "cornell.png"
-    save_preview(path, cornell, preview)
-    encoded = image_module.imread(path)[..., :3].astype(np.float64)
-    assert encoded.shape == (256, 256, 3)
-    rgb = np.where(encoded <= 0.04045, encoded / 12.92, ((encoded + 0.055) / 1.055) ** 2.4)  # back to linear
-    names = [s.name for s in cornell.surfaces]
-    seen = preview.surface_index
-
-    def strip_colour(surface, which):
-        rows, cols = np.nonzero(seen == names.index(surface))
-        low, high = np.percentile(cols, 2), np.percentile(cols, 98)
-        edges = {"left": (0.0, 0.15), "middle": (0.425, 0.575), "right": (0.85, 1.0)}[which]
-        chosen = (cols >= low + edges[0] * (high - low)) & (cols <= low + edges[1] * (high - low))
-        colour = rgb[rows[chosen], cols[chosen]].mean(axis=0)
-        return colour / colour.sum()
-
-    for surface in ("back_wall", "floor", "ceiling"):
-        left, middle, right = (strip_colour(surface, w) for w in ("left", "middle", "right"))
-        assert left[0] > middle[0] + 0.02, f"{surface}: no red bleeding near the red wall ({left} vs {middle})"
-        assert right[1] > middle[1] + 0.02, f"{surface}: no green bleeding near the green wall ({right} vs {middle})"
-
-    luminance = rgb @ LUMINANCE
-    light = seen == names.index("light")
-    assert light.sum() > 50
-    means = {name: luminance[seen == k].mean() for k, name in enumerate(names) if (seen == k).any()}
-    brightest_other = max(v for n, v in means.items() if n != "light")
-    assert means["light"] > 0.9 and means["light"] > 1.5 * brightest_other, means
-    brightest = np.argsort(luminance, axis=None)[-light.sum():]  # as many pixels as the light has
-    _, light_and_rim = dilate(np.zeros(light.shape + (1,)), light, 1)  # rim pixels blend light in
-    assert light_and_rim.ravel()[brightest].mean() > 0.97
-
-
-def test_cli_solve_writes_lightmaps_and_preview(tmp_path):
-    status = cli.main(["solve", "cornell-box", "--method", "hemicube", "--subdiv", "2", "--hemicube-res", "16",
-                       "--quiet", "--lightmaps", str(tmp_path / "maps"), "--texel-density", "32",
-                       "--preview", str(tmp_path / "preview.png"), "--preview-size", "64"])
-    assert status == 0
-    floor = np.load(tmp_path / "maps" / "floor_lightmap.npy")
-    assert floor.dtype == np.float32 and floor.ndim == 3 and floor.shape[2] == 4
-    assert sorted(p.name for p in (tmp_path / "maps").iterdir()) == sorted(
-        f"{name}_lightmap.npy" for name in load_scene("cornell-box").objects)
-    assert (tmp_path / "preview.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

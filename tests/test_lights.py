@@ -1,4 +1,4 @@
-"""Lamps and the world colour as shooters, against analytic direct lighting (core/lights.py)."""
+"""Lamps and the world colour as shooters, against analytic direct lighting (core/shooting/lamps.py)."""
 
 import math
 
@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from scenes import surface
 
-from radiosity_addon.core.effects import analyse
-from radiosity_addon.core.element_textures import element_centers
-from radiosity_addon.core.form_factor_kernels import point_to_polygon
-from radiosity_addon.core.scene import SceneError, scene_from_dict
-from radiosity_addon.core.solution import SolveSettings
-from radiosity_addon.core.solve import solve
+from radiosity_addon.core.scene import analyse
+from radiosity_addon.core.shooting import element_centers
+from radiosity_addon.core import point_to_polygon
+from radiosity_addon.core import SceneError, scene_from_dict
+from radiosity_addon.core import SolveSettings
+from radiosity_addon.core import solve
 
 RHO = 0.8
 FLOOR = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]  # 2 x 2, facing +z
@@ -33,8 +33,8 @@ def floor_elements(solution, elements):
     return points, solution.element_radiosity[mask].reshape(-1, 3)
 
 
-def progressive(scene, ctx, elements=4, **settings):
-    return solve(scene, SolveSettings(subdiv=2, elements=elements, **settings), ctx=ctx)
+def progressive(scene, gpu, elements=4, **settings):
+    return solve(scene, SolveSettings(subdiv=2, elements=elements, **settings), gpu=gpu)
 
 
 POINT = {"name": "bulb", "type": "point", "position": [0.2, -0.1, 1.0], "color": [1.0, 0.5, 0.25], "power": 100.0}
@@ -48,24 +48,24 @@ def point_lamp_radiance(points, lamp, falloff=1.0):
     return RHO * intensity * (cosine * falloff / (math.pi * r2))[:, None]
 
 
-def test_point_lamp_on_a_floor_is_exact_at_element_centres(ctx):
-    solution = progressive(floor_scene([POINT]), ctx)
+def test_point_lamp_on_a_floor_is_exact_at_element_centres(gpu):
+    solution = progressive(floor_scene([POINT]), gpu)
     points, radiosity = floor_elements(solution, 4)
     np.testing.assert_allclose(radiosity, point_lamp_radiance(points, POINT), rtol=1e-4)
-    assert solution.report["effects"]["lamps"] == 1 and solution.report["effects"]["emitters"] == 1
+    assert solution.report.work.direct.lamps == 1 and solution.report.effects.emitters == 1
 
 
-def test_point_lamp_through_the_original_method(ctx):
+def test_point_lamp_through_the_original_method(gpu):
     scene = floor_scene([POINT])
-    solution = solve(scene, SolveSettings(method="hemicube", subdiv=4), ctx=ctx)
+    solution = solve(scene, SolveSettings(method="hemicube", subdiv=4), gpu=gpu)
     expected = point_lamp_radiance(solution.patches.center, POINT)
     np.testing.assert_allclose(solution.patch_radiosity, expected, rtol=2e-3)
 
 
-def test_spot_cone_and_blend(ctx):
+def test_spot_cone_and_blend(gpu):
     spot = {**POINT, "type": "spot", "position": [0, 0, 1.0], "direction": [0, 0, -1],
             "spot_size": math.radians(60), "spot_blend": 0.3}
-    solution = progressive(floor_scene([spot]), ctx, elements=8)
+    solution = progressive(floor_scene([spot]), gpu, elements=8)
     points, radiosity = floor_elements(solution, 8)
     d = points - np.asarray(spot["position"])
     cos_angle = -d[:, 2] / np.linalg.norm(d, axis=1)
@@ -76,14 +76,14 @@ def test_spot_cone_and_blend(ctx):
     assert np.any(expected[:, 0] == 0) and np.any(expected[:, 0] > 0)  # both sides of the cone's edge
 
 
-def test_sun_lights_evenly_and_a_panel_casts_its_shadow(ctx):
+def test_sun_lights_evenly_and_a_panel_casts_its_shadow(gpu):
     sun = {"name": "sun", "type": "sun", "direction": [0.0, 0.6, -0.8], "color": [1, 1, 1], "strength": 3.0}
     lit = RHO * 3.0 * 0.8 / math.pi
-    solution = progressive(floor_scene([sun]), ctx)
+    solution = progressive(floor_scene([sun]), gpu)
     np.testing.assert_allclose(floor_elements(solution, 4)[1], lit, rtol=1e-4)
     # a black panel at height 0.5 over x, y in [-0.5, 0.5]: its shadow is shifted by 0.5 * 0.6/0.8 along +y
     panel = surface("panel", [[-0.5, -0.5, 0.5], [-0.5, 0.5, 0.5], [0.5, 0.5, 0.5], [0.5, -0.5, 0.5]], 0.0, 0.0)
-    shaded = progressive(floor_scene([sun], extra_surfaces=[panel]), ctx, elements=4)
+    shaded = progressive(floor_scene([sun], extra_surfaces=[panel]), gpu, elements=4)
     points, radiosity = floor_elements(shaded, 4)
     in_shadow = (np.abs(points[:, 0]) < 0.45) & (np.abs(points[:, 1] - 0.375) < 0.45)
     far_from_shadow = (np.abs(points[:, 0]) > 0.6) | (np.abs(points[:, 1] - 0.375) > 0.6)
@@ -91,23 +91,23 @@ def test_sun_lights_evenly_and_a_panel_casts_its_shadow(ctx):
     np.testing.assert_allclose(radiosity[far_from_shadow], lit, rtol=1e-3)
 
 
-def test_area_lamp_is_an_emitting_polygon(ctx):
+def test_area_lamp_is_an_emitting_polygon(gpu):
     corners = [[-0.2, -0.2, 1.0], [-0.2, 0.2, 1.0], [0.2, 0.2, 1.0], [0.2, -0.2, 1.0]]  # front faces -z
     lamp = {"name": "panel", "type": "area", "vertices": corners, "color": [1, 1, 1], "power": 50.0}
-    solution = progressive(floor_scene([lamp]), ctx)
+    solution = progressive(floor_scene([lamp]), gpu)
     points, radiosity = floor_elements(solution, 4)
     radiance = 50.0 / (math.pi * 0.16)
     factor = point_to_polygon(points, np.tile([0.0, 0.0, 1.0], (len(points), 1)), np.asarray([corners], float))
     np.testing.assert_allclose(radiosity[:, 0], RHO * radiance * factor[:, 0], rtol=1e-3)
 
 
-def test_world_colour_lights_by_sky_fraction(ctx):
+def test_world_colour_lights_by_sky_fraction(gpu):
     world = [0.5, 0.5, 0.5]
-    open_floor = progressive(floor_scene(world=world), ctx)
+    open_floor = progressive(floor_scene(world=world), gpu)
     np.testing.assert_allclose(floor_elements(open_floor, 4)[1], RHO * 0.5, rtol=0.01)
     # a black wall standing on the floor's edge x = 1 (facing -x) hides part of the sky
     wall = surface("wall", [[1, -1, 0], [1, -1, 2], [1, 1, 2], [1, 1, 0]], 0.0, 0.0)
-    walled = progressive(floor_scene(world=world, extra_surfaces=[wall]), ctx)
+    walled = progressive(floor_scene(world=world, extra_surfaces=[wall]), gpu)
     points, radiosity = floor_elements(walled, 4)
     # exact sky fraction at a point: 1 - unoccluded form factor to the wall
     wall_polygon = np.asarray([wall["vertices"]], dtype=float)
@@ -136,6 +136,6 @@ def test_lamps_in_the_scene_analysis():
       "spot_size": 1.0}, "direction"),
     ({"type": "area", "vertices": [[0, 0, 1]] * 4, "color": [1, 1, 1], "power": 1}, "zero area"),
 ])
-def test_bad_lamps_are_refused_by_name(ctx, light, fault):
+def test_bad_lamps_are_refused_by_name(gpu, light, fault):
     with pytest.raises(SceneError, match=fault):
-        solve(floor_scene([{"name": "L", **light}]), SolveSettings(subdiv=1, elements=1), ctx=ctx)
+        solve(floor_scene([{"name": "L", **light}]), SolveSettings(subdiv=1, elements=1), gpu=gpu)

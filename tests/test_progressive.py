@@ -9,16 +9,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from radiosity_addon.core import gl
-from radiosity_addon.core.element_textures import ElementLayout, ElementTextures, element_areas, element_centers
-from radiosity_addon.core.padding import pad_tiles
-from radiosity_addon.bench.scenes import CUBE_FACES, opposed_rectangles_form_factor
-from radiosity_addon.core.patches import subdivide
-from radiosity_addon.core.form_factor_kernels import point_to_clipped_polygon as point_polygon_form_factor
-from radiosity_addon.core.scene import load_scene, polygon_normal, scene_from_dict
-from radiosity_addon.core.shooting import Gatherer, PatchBuffers, Selector, patch_shooter
-from radiosity_addon.core.solution import SolveSettings
-from radiosity_addon.core.solve import solve
+from oracles import patch_shooter, visibility_misclassification
+from oracles import point_to_clipped_polygon as point_polygon_form_factor
+from scenes import CUBE_FACES, opposed_rectangles_form_factor
+
+from radiosity_addon.core import SolveSettings, load_scene, scene_from_dict, solve, subdivide
+from radiosity_addon.core.imaging import pad_tiles
+from radiosity_addon.core.progressive import Selector
+from radiosity_addon.core.scene.geometry import polygon_area_vector, unit
+from radiosity_addon.core.shooting import (ElementLayout, ElementTextures, PatchBuffers, ShootingPass, element_areas,
+                                           element_centers)
 from radiosity_addon.core.visibility import VisibilityMap
 
 def cube(reflectance: float, emission: dict) -> object:
@@ -48,7 +48,7 @@ def perpendicular_rectangles(w: float = 1.0, h: float = 1.0, length: float = 1.0
 def cube_face_reference(reflectance: float, emission: np.ndarray) -> np.ndarray:
     """Per-face radiosity of the unit cube, float64, from exact area-to-area form factors."""
     names = list(CUBE_FACES)
-    normals = np.array([polygon_normal(np.array(CUBE_FACES[n], dtype=float)) for n in names])
+    normals = np.array([unit(polygon_area_vector(np.array(CUBE_FACES[n], dtype=float))) for n in names])
     opposed, adjacent = opposed_squares(), perpendicular_rectangles()
     form_factors = np.where(normals @ normals.T < -0.5, opposed, adjacent)
     np.fill_diagonal(form_factors, 0.0)
@@ -62,13 +62,6 @@ def face_means(solution) -> np.ndarray:
         (area[m, None] * solution.patch_radiosity[m]).sum(axis=0) / area[m].sum()
         for m in (patches.surface == k for k in range(patches.surface.max() + 1))
     ])
-
-
-@pytest.fixture(scope="module")
-def ctx():
-    context = gl.create_context()
-    yield context
-    context.release()
 
 
 def test_analytic_oracles_match_design_values():
@@ -98,28 +91,25 @@ def test_element_areas_sum_to_patch_area_for_quads_and_triangles():
     assert areas[triangle].std() > 0  # unequal elements: why residuals are area weighted
 
 
-def test_one_shot_matches_numpy_kernel_in_element_order(ctx):
+def test_one_shot_matches_numpy_kernel_in_element_order(gpu):
     """ΔB/ρ of every element after one shot from the floor equals the numpy contour factor at
     element [p, j, i]'s centre (s = (i+.5)/S, t = (j+.5)/S): checks kernel, visibility in a
     convex room, and the element order of the readback."""
     scene = cube(0.5, {"floor": 1.0})
     patches = subdivide(scene, 1)
     s = 4
-    textures = ElementTextures(ctx, patches, s)
-    buffers = PatchBuffers(ctx, patches, textures)
-    visibility_map = VisibilityMap(ctx, patches, 512, "search", scene.diameter)
-    gatherer = Gatherer(ctx, textures, buffers, "exact", 1)
-    try:
+    with gpu.resources() as res:
+        textures = ElementTextures(res, patches, s)
+        buffers = PatchBuffers(res, patches, textures)
+        visibility_map = VisibilityMap(res, patches, 512, "search", scene.diameter)
+        shooting = ShootingPass(res, textures, buffers, "exact", 1)
         floor = list(CUBE_FACES).index("floor")
         shooter = patch_shooter(patches, floor, np.ones(3))
         visibility_map.render(shooter.position, shooter.axes, skip_patch=floor)
-        gatherer.shoot(shooter, visibility_map)
-        gpu = textures.read_radiosity()[..., 0] / 0.5
+        shooting.shoot(shooter, visibility_map)
+        gathered = textures.read_radiosity()[..., 0] / 0.5
         residual = textures.read_residual()[..., 0]
         padded = textures.read_padded_radiosity()
-    finally:
-        for obj in (gatherer, visibility_map, buffers, textures):
-            obj.release()
     centres = element_centers(patches, s)
     expected = np.zeros((len(patches), s, s))
     for p in range(len(patches)):
@@ -128,7 +118,7 @@ def test_one_shot_matches_numpy_kernel_in_element_order(ctx):
                 centres[p].reshape(-1, 3), np.tile(patches.normal[p], (s * s, 1)), patches.corners[floor]
             ).reshape(s, s)
     expected[floor] = 2.0  # the floor's own radiosity E = 1, divided by ρ = 0.5
-    assert np.allclose(gpu, expected, rtol=2e-4, atol=1e-6)
+    assert np.allclose(gathered, expected, rtol=2e-4, atol=1e-6)
     assert np.all(residual[floor] == 0)  # the shooter's residual is cleared
     # gutters continue the tile: clamp to edge, which the shared pad_tiles gives up to its
     # 1e-3 weight on diagonal neighbours
@@ -137,18 +127,14 @@ def test_one_shot_matches_numpy_kernel_in_element_order(ctx):
     assert np.allclose(padded, pad_tiles(tiles, 1), rtol=2e-3)
 
 
-def test_selection_picks_largest_unshot_power_from_the_mipmap(ctx):
+def test_selection_picks_largest_unshot_power_from_the_mipmap(gpu):
     scene = load_scene("cornell-box")
     patches = subdivide(scene, 2)
     patches.emission[:] = np.random.default_rng(1).uniform(0, 1, patches.emission.shape)
-    textures = ElementTextures(ctx, patches, 4)
-    buffers = PatchBuffers(ctx, patches, textures)
-    selector = Selector(ctx, textures, buffers)
-    try:
+    with gpu.resources() as res:
+        textures = ElementTextures(res, patches, 4)
+        selector = Selector(res, textures, PatchBuffers(res, patches, textures))
         selection = selector.select()
-    finally:
-        for obj in (selector, buffers, textures):
-            obj.release()
     power = patches.area[:, None] * patches.emission
     assert selection.patch == int(np.argmax(power.sum(axis=1)))
     assert np.allclose(selection.residual, patches.emission[selection.patch], rtol=1e-5)
@@ -156,30 +142,30 @@ def test_selection_picks_largest_unshot_power_from_the_mipmap(ctx):
     assert ElementLayout(len(patches), 4).level == 2
 
 
-def test_furnace_exact_kernel_within_2_percent(ctx):
+def test_furnace_exact_kernel_within_2_percent(gpu):
     scene = cube(0.9, {name: 1.0 for name in CUBE_FACES})
-    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=2e-3), ctx=ctx)
+    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=2e-3), gpu=gpu)
     elements = solution.element_radiosity
-    assert solution.report["kernel"] == "exact"
+    assert solution.report.details.kernel == "exact"
     assert np.all(np.abs(elements / 10.0 - 1) < 0.02), (elements.min(), elements.max())
     assert np.allclose(solution.patch_radiosity, 10.0, rtol=0.02)
 
 
-def test_furnace_disk_kernel_loses_energy(ctx):
+def test_furnace_disk_kernel_loses_energy(gpu):
     """The dissertation's disk approximation leaks in a closed box: kept selectable, not default."""
     scene = cube(0.9, {name: 1.0 for name in CUBE_FACES})
-    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=2e-3, kernel="disk"), ctx=ctx)
-    energy = solution.report["energy"]
+    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=2e-3, kernel="disk"), gpu=gpu)
+    energy = solution.report.details.energy
     assert energy["escaped"] > 0.05 * energy["emitted"]
     assert solution.patch_radiosity.mean() < 9.0
 
 
 @pytest.fixture(scope="module")
-def lit_cube(ctx):
+def lit_cube(gpu):
     """Closed cube, ρ = 0.9, emitting ceiling; records the progress callback."""
     scene = cube(0.9, {"ceiling": 1.0})
     calls = []
-    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3), ctx=ctx,
+    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3), gpu=gpu,
                      progress=lambda fraction, message, details: calls.append((fraction, dict(details))))
     return scene, solution, calls
 
@@ -196,7 +182,7 @@ def test_unshot_power_decreases_monotonically_and_progress_is_physical(lit_cube)
     _, solution, calls = lit_cube
     unshot = np.array([details["unshot_fraction"] for _, details in calls])
     fractions = np.array([fraction for fraction, _ in calls])
-    assert len(unshot) == solution.report["shots"] + 1
+    assert len(unshot) == solution.report.details.shots + 1
     assert unshot[0] == pytest.approx(1.0, rel=1e-6) and unshot[-1] <= 1e-3
     assert np.all(np.diff(unshot) <= 1e-7)
     assert np.all(np.diff(fractions) >= -1e-7) and fractions[-1] == pytest.approx(1 - unshot[-1])
@@ -218,7 +204,7 @@ def test_energy_balance_of_closed_scene_within_half_percent(lit_cube):
     irradiance = (solution.element_radiosity - emission) / reflectance
     emitted = (areas * emission).sum()
     absorbed = (areas * (1 - reflectance) * irradiance).sum()
-    energy = solution.report["energy"]
+    energy = solution.report.details.energy
     assert energy["emitted"] == pytest.approx(emitted, rel=1e-12)
     assert abs(absorbed + energy["unshot_gpu_sum"] - emitted) < 0.005 * emitted
     assert energy["escaped"] < 0.005 * emitted  # closed: nothing should leave
@@ -229,22 +215,20 @@ def test_energy_balance_of_closed_scene_within_half_percent(lit_cube):
     assert energy["unshot"] == pytest.approx(energy["unshot_gpu_sum"], rel=1e-3, abs=1e-6 * emitted)
 
 
-def test_visibility_search_misclassifies_fewer_elements_than_plain(ctx):
-    from tools.measure_visibility import measure
-
+def test_visibility_search_misclassifies_fewer_elements_than_plain(gpu):
     scene = load_scene("cornell-box")
     patches = subdivide(scene, 3)
     shooters = np.linspace(0, len(patches) - 1, 8).round().astype(int)
-    plain = measure(ctx, scene, patches, 2, 512, "plain", shooters)
-    tessellated = measure(ctx, scene, patches, 2, 512, "tessellated", shooters)
-    search = measure(ctx, scene, patches, 2, 512, "search", shooters)
+    plain = visibility_misclassification(gpu, scene, patches, 2, 512, "plain", shooters)
+    tessellated = visibility_misclassification(gpu, scene, patches, 2, 512, "tessellated", shooters)
+    search = visibility_misclassification(gpu, scene, patches, 2, 512, "search", shooters)
     assert search["misclassified"] < tessellated["misclassified"] < plain["misclassified"]
     assert search["misclassified_non_grazing"] < 0.03
-    guarded = measure(ctx, scene, patches, 2, 512, "guarded", shooters)
+    guarded = visibility_misclassification(gpu, scene, patches, 2, 512, "guarded", shooters)
     assert guarded["false_visible"] < search["false_visible"]  # fewer leaks past occluders
 
 
-def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(ctx):
+def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(gpu):
     """Per-surface mean radiosity within 5 % on every surface, both methods on the same 8x8
     patches (progressive: one element per patch, so both shoot and receive per patch).
 
@@ -253,8 +237,8 @@ def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(ctx):
     subdiv 4, 6.6 % at 6 with 2x2 elements vs hemi-cube 8; 3.6 % at 8).
     """
     scene = load_scene("cornell-box")
-    hemicube = solve(scene, SolveSettings(method="hemicube", subdiv=8, hemicube_res=128), ctx=ctx)
-    progressive = solve(scene, SolveSettings(subdiv=8, elements=1, tolerance=1e-2), ctx=ctx)
+    hemicube = solve(scene, SolveSettings(method="hemicube", subdiv=8, hemicube_res=128), gpu=gpu)
+    progressive = solve(scene, SolveSettings(subdiv=8, elements=1, tolerance=1e-2), gpu=gpu)
     reference = face_means(hemicube)
     difference = np.abs(face_means(progressive) - reference).max(axis=1) / reference.max(axis=1)
     names = [s.name for s in scene.surfaces]
@@ -262,17 +246,17 @@ def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(ctx):
     assert np.all(difference < 0.05), report
 
 
-def test_cancel_and_shot_budget(ctx):
-    from radiosity_addon.core.solution import SolveCancelled
+def test_cancel_and_shot_budget(gpu):
+    from radiosity_addon.core import SolveCancelled
 
     scene = cube(0.5, {"ceiling": 1.0})
     calls = []
     with pytest.raises(SolveCancelled):
-        solve(scene, SolveSettings(subdiv=1, elements=1), ctx=ctx,
+        solve(scene, SolveSettings(subdiv=1, elements=1), gpu=gpu,
               should_cancel=lambda: calls.append(1) or len(calls) > 3)
-    solution = solve(scene, SolveSettings(subdiv=1, elements=1, max_shots=2, tolerance=1e-6), ctx=ctx)
-    assert solution.report["shots"] == 2 and solution.report["stop_reason"] == "max_shots"
-    assert solution.report["unshot_fraction"] > 1e-6
+    solution = solve(scene, SolveSettings(subdiv=1, elements=1, max_shots=2, tolerance=1e-6), gpu=gpu)
+    assert solution.report.details.shots == 2 and solution.report.details.stop_reason == "max_shots"
+    assert solution.report.details.unshot_fraction > 1e-6
 
 
 def test_cli_progressive_writes_elements_and_report(tmp_path):

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scenes import closed_cube, surface
 
-from radiosity_addon.core.patches import subdivide
-from radiosity_addon.core.scene import SceneError, load_scene, save_scene, scene_from_dict
+from radiosity_addon.core import subdivide
+from radiosity_addon.core import SceneError, load_scene, save_scene, scene_from_dict
 
 SQUARE = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
 

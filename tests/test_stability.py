@@ -1,7 +1,7 @@
 """Hard cases: results stay finite, non-negative, bounded against exact or independent references,
 and energy-balanced — or the solve stops with a clear SolveError, never silently wrong.
 
-Why each case is hard (also in docs/accuracy.md):
+Why each case is hard (also in the README, "Hard cases"):
 - ρ → 1 in a closed box: the solution is E/(1 − ρ) (×100, ×1000); every error in a form-factor
   row sum and every residual change is amplified by ρ/(1 − ρ), iterations grow like 1/(1 − ρ),
   and fp32 sweeps hit their precision floor before a tight tolerance.
@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 from scenes import closed_cube, opposed_squares, perpendicular_squares, surface
 
-from radiosity_addon.core import linear_solvers
-from radiosity_addon.core.form_factor_kernels import point_to_polygon
-from radiosity_addon.core.scene import load_scene, scene_from_dict
-from radiosity_addon.core.solution import SolveError, SolveSettings
-from radiosity_addon.core.solve import solve
+from radiosity_addon.core.hemicube import linear_solvers
+from radiosity_addon.core import point_to_polygon
+from radiosity_addon.core import load_scene, scene_from_dict
+from radiosity_addon.core import SolveError, SolveSettings
+from radiosity_addon.core import solve
 
 SOLVERS = ["jacobi-gpu", "jacobi-cpu", "gauss-seidel"]
 
@@ -51,11 +51,11 @@ def energy_imbalance(solution) -> float:
 
 @pytest.mark.parametrize("reflectance", [0.99, 0.999])
 @pytest.mark.parametrize("solver", SOLVERS)
-def test_closed_box_high_reflectance_converges_or_says_why(ctx, reflectance, solver):
+def test_closed_box_high_reflectance_converges_or_says_why(gpu, reflectance, solver):
     scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
     tolerance = 1e-6
     try:
-        solution = solve(scene, hemicube(solver=solver, tolerance=tolerance), ctx=ctx)
+        solution = solve(scene, hemicube(solver=solver, tolerance=tolerance), gpu=gpu)
     except SolveError as error:
         # the only acceptable failure: fp32 sweeps reaching their floor, said plainly with a remedy
         assert solver == "jacobi-gpu" and "precision floor" in str(error) and "--tolerance" in str(error)
@@ -70,15 +70,15 @@ def test_closed_box_high_reflectance_converges_or_says_why(ctx, reflectance, sol
     assert energy_imbalance(solution) < bound
 
 
-def test_closed_box_analytic_kernel_bias_is_bounded(ctx):
+def test_closed_box_analytic_kernel_bias_is_bounded(gpu):
     """With the scene analysis' analytic (centre-point) form factors, rows sum to slightly under 1,
     and the bias is ρ(1 − row sum)/(1 − ρ): bounded, never a blow-up."""
     reflectance = 0.99
     scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
     solution = solve(scene, SolveSettings(method="hemicube", subdiv=4, solver="gauss-seidel",
-                                          tolerance=1e-7), ctx=ctx)
+                                          tolerance=1e-7), gpu=gpu)
     assert_physical(solution)
-    row_sum = solution.report["form_factor_row_sum"]["min"]
+    row_sum = solution.report.details.form_factor_row_sum["min"]
     exact = 1.0 / (1 - reflectance)
     worst_bias = 1 - (1 - reflectance) / (1 - reflectance * row_sum)
     assert np.all(solution.patch_radiosity <= exact * 1.001)
@@ -86,7 +86,7 @@ def test_closed_box_analytic_kernel_bias_is_bounded(ctx):
 
 
 @pytest.mark.parametrize("solver", SOLVERS)
-def test_divergent_system_is_refused_not_returned(ctx, solver):
+def test_divergent_system_is_refused_not_returned(gpu, solver):
     """A spectral radius above 1 (reflectance 1.05 with rows summing to 1) must raise, not return."""
     count = 16
     form_factors = np.full((count, count), 1.0 / (count - 1), dtype=np.float32)
@@ -95,14 +95,14 @@ def test_divergent_system_is_refused_not_returned(ctx, solver):
     emission = np.ones((count, 3))
     monitor = linear_solvers.Convergence(solver, 1e-6, 100_000)
     with pytest.raises(SolveError, match="diverged"):
-        linear_solvers.solve_linear(ctx, solver, form_factors, reflectance, emission, monitor)
+        linear_solvers.solve_linear(gpu, solver, form_factors, reflectance, emission, monitor)
 
 
 @pytest.mark.parametrize("solver", SOLVERS)
-def test_iteration_cap_is_reported(ctx, solver):
+def test_iteration_cap_is_reported(gpu, solver):
     scene = scene_from_dict(closed_cube(reflectance=0.999, emission=1.0))
     with pytest.raises(SolveError, match="did not converge|stalled"):
-        solve(scene, hemicube(solver=solver, tolerance=1e-9, max_iterations=64), ctx=ctx)
+        solve(scene, hemicube(solver=solver, tolerance=1e-9, max_iterations=64), gpu=gpu)
 
 
 # --- scale and emission invariance ---------------------------------------------------------------
@@ -121,15 +121,15 @@ def cornell_dict():
 
 
 @pytest.fixture(scope="module")
-def cornell_baseline(ctx, cornell_dict):
+def cornell_baseline(gpu, cornell_dict):
     return solve(scene_from_dict(cornell_dict), hemicube(subdiv=3, hemicube_res=64, solver="gauss-seidel"),
-                 ctx=ctx)
+                 gpu=gpu)
 
 
 @pytest.mark.parametrize("length, emission", [(1e-4, 1.0), (1e4, 1.0), (1.0, 1e6)])
-def test_cornell_box_is_scale_and_emission_invariant(ctx, cornell_dict, cornell_baseline, length, emission):
+def test_cornell_box_is_scale_and_emission_invariant(gpu, cornell_dict, cornell_baseline, length, emission):
     scene = scene_from_dict(scaled_scene(cornell_dict, length, emission))
-    solution = solve(scene, hemicube(subdiv=3, hemicube_res=64, solver="gauss-seidel"), ctx=ctx)
+    solution = solve(scene, hemicube(subdiv=3, hemicube_res=64, solver="gauss-seidel"), gpu=gpu)
     assert_physical(solution)
     expected = cornell_baseline.patch_radiosity
     ours = solution.patch_radiosity / emission
@@ -144,7 +144,7 @@ def test_cornell_box_is_scale_and_emission_invariant(ctx, cornell_dict, cornell_
 
 # --- 10 000 patches: fp32 accumulation -----------------------------------------------------------
 
-def test_ten_thousand_patch_gpu_jacobi_matches_float64(ctx):
+def test_ten_thousand_patch_gpu_jacobi_matches_float64(gpu):
     """Rows of 10 000 equal fp32 form factors: the worst case for a running fp32 sum (all terms of
     one sign and size). Exact float64 answer of the same (fp32-rounded) system in closed form."""
     count, reflectance = 10_000, 0.25  # ρ = 0.25: 16 sweeps (one check) leave a tail of 0.25^16
@@ -158,7 +158,7 @@ def test_ten_thousand_patch_gpu_jacobi_matches_float64(ctx):
     total = emission.sum(axis=0) / (1 + rho_f - rho_f * count)
     exact = (emission + rho_f * total) / (1 + rho_f)
     monitor = linear_solvers.Convergence("jacobi-gpu", 1e-6, 1000)
-    radiosity = linear_solvers.jacobi_gpu(ctx, form_factors, np.full((count, 3), reflectance), emission, monitor)
+    radiosity = linear_solvers.jacobi_gpu(gpu, form_factors, np.full((count, 3), reflectance), emission, monitor)
     relative = np.abs(radiosity - exact).max() / exact.max()
     # Stated bound: 5e-6 of max B for the accumulated rounding (measured 7.5e-7 on llvmpipe). The
     # shader keeps two partial sums of 5 000 terms; a running sum of 5 000 equal terms may drift
@@ -168,12 +168,12 @@ def test_ten_thousand_patch_gpu_jacobi_matches_float64(ctx):
 
 # --- near-singular geometry ----------------------------------------------------------------------
 
-def test_touching_perpendicular_patches_have_no_spikes(ctx):
+def test_touching_perpendicular_patches_have_no_spikes(gpu):
     """Patches along a shared edge: r → 0 in cos cos / (π r²). A point on the edge sees the emitter
     fill half its hemisphere (F = 1/2), so ρ E / 2 bounds every patch."""
     scene = scene_from_dict(perpendicular_squares(receiver_reflectance=0.5, emitter_emission=1.0))
     for skips in (False, True):  # hemi-cubes, and the analytic unoccluded kernel
-        solution = solve(scene, hemicube(subdiv=16, hemicube_res=64, skip_unneeded=skips), ctx=ctx)
+        solution = solve(scene, hemicube(subdiv=16, hemicube_res=64, skip_unneeded=skips), gpu=gpu)
         assert_physical(solution)
         receiver = solution.patches.surface == 0
         values = solution.patch_radiosity[receiver]
@@ -191,32 +191,32 @@ def centre_point_reference(solution, emitter_index: int, scene) -> np.ndarray:
     return patches.reflectance[:, 0] * emitter.emission[0] * factors
 
 
-def receiver_against_centre_points(scene, ctx):
+def receiver_against_centre_points(scene, gpu):
     """Hemi-cube radiosity of surface 0's patches (red) and Lambert's centre-point reference for it."""
-    solution = solve(scene, hemicube(subdiv=8, hemicube_res=128), ctx=ctx)
+    solution = solve(scene, hemicube(subdiv=8, hemicube_res=128), gpu=gpu)
     assert_physical(solution)
     receiving = solution.patches.surface == 0
     return solution.patch_radiosity[receiving, 0], centre_point_reference(solution, 1, scene)[receiving]
 
 
-def test_grazing_light_stays_bounded(ctx):
+def test_grazing_light_stays_bounded(gpu):
     """An emitter standing 1 % of its size above the receiver's plane, beside it: light arrives at
     grazing angles, where hemi-cube side-face pixels carry almost no weight."""
     receiver = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
     emitter = [[1.2, 0, 0.01], [1.2, 0, 0.51], [1.2, 1, 0.51], [1.2, 1, 0.01]]  # faces −x, towards the receiver
     scene = scene_from_dict({"surfaces": [surface("receiver", receiver, 0.5, 0.0),
                                           surface("emitter", emitter, 0.0, 1.0)]})
-    ours, reference = receiver_against_centre_points(scene, ctx)
+    ours, reference = receiver_against_centre_points(scene, gpu)
     assert np.abs(ours - reference).max() < 0.02 * reference.max()  # measured 0.5 %
     assert ours.sum() == pytest.approx(reference.sum(), rel=0.01)
 
 
-def test_long_thin_sliver_has_no_spikes(ctx):
+def test_long_thin_sliver_has_no_spikes(gpu):
     """A 100:1 sliver receiver under a square emitter: patches 100× longer than wide."""
     receiver = [[0, 0, 0], [2, 0, 0], [2, 0.02, 0], [0, 0.02, 0]]
     scene = scene_from_dict({"surfaces": [surface("receiver", receiver, 0.5, 0.0),
                                           opposed_squares(0.5)["surfaces"][1]]})
-    ours, reference = receiver_against_centre_points(scene, ctx)
+    ours, reference = receiver_against_centre_points(scene, gpu)
     assert np.abs(ours - reference).max() < 0.03 * reference.max()  # measured 0.8 %
 
 
@@ -227,18 +227,18 @@ def progressive(**overrides) -> SolveSettings:
     return SolveSettings(**(settings | overrides))
 
 
-def test_progressive_closed_box_high_reflectance_stops_at_budget_from_below(ctx):
+def test_progressive_closed_box_high_reflectance_stops_at_budget_from_below(gpu):
     """ρ = 0.99 needs ~100× the emitted power shot; at a shot budget the answer must be below the
     exact one by what is still unshot (never above, never NaN), and the float64 ledger must balance."""
     reflectance = 0.99
     scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
-    solution = solve(scene, progressive(max_shots=240), ctx=ctx)
-    assert solution.report["stop_reason"] == "max_shots"
+    solution = solve(scene, progressive(max_shots=240), gpu=gpu)
+    assert solution.report.details.stop_reason == "max_shots"
     assert_physical(solution)
     exact = 1.0 / (1 - reflectance)
     radiosity = solution.patch_radiosity
     assert np.all(radiosity <= exact * 1.001)
-    energy = solution.report["energy"]
+    energy = solution.report.details.energy
     assert abs(energy["emitted"] - energy["absorbed"] - energy["escaped"] - energy["unshot"]) < 1e-9 * energy["emitted"]
     assert energy["escaped"] < 0.01 * energy["emitted"]  # a closed box: (almost) nothing escapes
     # in a uniform closed box, unshot radiosity U/A still adds ρ/(1 − ρ) U/A everywhere
@@ -248,15 +248,15 @@ def test_progressive_closed_box_high_reflectance_stops_at_budget_from_below(ctx)
 
 
 @pytest.fixture(scope="module")
-def cornell_progressive_baseline(ctx, cornell_dict):
-    return solve(scene_from_dict(cornell_dict), progressive(subdiv=2, tolerance=1e-2), ctx=ctx)
+def cornell_progressive_baseline(gpu, cornell_dict):
+    return solve(scene_from_dict(cornell_dict), progressive(subdiv=2, tolerance=1e-2), gpu=gpu)
 
 
 @pytest.mark.parametrize("length, emission", [(1e-4, 1.0), (1e4, 1.0), (1.0, 1e6)])
-def test_progressive_is_scale_and_emission_invariant(ctx, cornell_dict, cornell_progressive_baseline,
+def test_progressive_is_scale_and_emission_invariant(gpu, cornell_dict, cornell_progressive_baseline,
                                                      length, emission):
     scene = scene_from_dict(scaled_scene(cornell_dict, length, emission))
-    solution = solve(scene, progressive(subdiv=2, tolerance=1e-2), ctx=ctx)
+    solution = solve(scene, progressive(subdiv=2, tolerance=1e-2), gpu=gpu)
     assert_physical(solution)
     expected = cornell_progressive_baseline.element_radiosity
     ours = solution.element_radiosity / emission
@@ -266,9 +266,9 @@ def test_progressive_is_scale_and_emission_invariant(ctx, cornell_dict, cornell_
     assert difference.max() < 0.01 * expected[reflecting].max()
 
 
-def test_progressive_touching_patches_have_no_spikes(ctx):
+def test_progressive_touching_patches_have_no_spikes(gpu):
     scene = scene_from_dict(perpendicular_squares(receiver_reflectance=0.5, emitter_emission=1.0))
-    solution = solve(scene, progressive(subdiv=4, elements=4, tolerance=1e-3), ctx=ctx)
+    solution = solve(scene, progressive(subdiv=4, elements=4, tolerance=1e-3), gpu=gpu)
     assert_physical(solution)
     elements = solution.element_radiosity[solution.patches.surface == 0]
     assert np.all(np.isfinite(elements)) and np.all(elements >= 0)

@@ -1,4 +1,4 @@
-"""Write radiosity_addon/core/scenes/cornell-box.json from the published Cornell box data.
+"""Write radiosity_addon/core/scene/scenes/cornell-box.json from the published Cornell box data.
 
 Geometry: the Cornell Program of Computer Graphics measurements (millimetres),
 converted to metres. The published left wall is 3 mm off-plane, so it is kept
@@ -80,7 +80,7 @@ def main():
             surfaces.append(surface(obj, f"{obj}_{face_name}", WHITE, [0, 0, 0], oriented(face, faces_away_from=centre)))
     light = oriented(LIGHT, faces_towards=np.array([278.0, 0.0, 279.6]))
     surfaces.append(surface("light", "light", LIGHT_REFLECTANCE, LIGHT_EMISSION, light))
-    out = Path(__file__).resolve().parents[1] / "radiosity_addon/core/scenes/cornell-box.json"
+    out = Path(__file__).resolve().parents[1] / "radiosity_addon/core/scene/scenes/cornell-box.json"
     out.write_text(json.dumps({"camera": CAMERA, "surfaces": surfaces}, indent=1) + "\n")
     print(f"wrote {out}")
 

@@ -14,17 +14,14 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from radiosity_addon.bench.scenes import CUBE_FACES  # noqa: E402
-from radiosity_addon.core import gl  # noqa: E402
-from radiosity_addon.core.scene import load_scene, scene_from_dict  # noqa: E402
-from radiosity_addon.core.solution import SolveSettings  # noqa: E402
-from radiosity_addon.core.solve import solve  # noqa: E402
+from radiosity_addon.core import GPU, SolveSettings, load_scene, scene_from_dict, solve  # noqa: E402
 
-def furnace(ctx, args):
+
+def furnace(gpu, args):
     scene = scene_from_dict({"surfaces": [
         {"name": n, "vertices": v, "reflectance": [0.9] * 3, "emission": [1.0] * 3} for n, v in CUBE_FACES.items()
     ]})
@@ -32,25 +29,25 @@ def furnace(ctx, args):
         for subdiv in args.subdiv:
             started = time.perf_counter()
             solution = solve(scene, SolveSettings(subdiv=subdiv, elements=args.elements, tolerance=args.tolerance,
-                                                  kernel=kernel), ctx=ctx)
+                                                  kernel=kernel), gpu=gpu)
             b = solution.element_radiosity[..., 0]
             area = solution.patches.area
             mean = float((area * solution.patch_radiosity[:, 0]).sum() / area.sum())
-            energy = solution.report["energy"]
+            energy = solution.report.details.energy
             print(f"furnace kernel {kernel:5s} subdiv {subdiv} elements {args.elements} tol {args.tolerance:g}:"
                   f" mean B {mean:.4f} (error {mean / 10 - 1:+.2%}), elements {b.min():.3f}..{b.max():.3f},"
                   f" row-sum shortfall {energy['escaped'] / energy['emitted']:.2%} and surplus"
                   f" {energy['surplus'] / energy['emitted']:.2%} of emitted,"
-                  f" {solution.report['shots']} shots, {time.perf_counter() - started:.1f} s")
+                  f" {solution.report.shots} shots, {time.perf_counter() - started:.1f} s")
 
 
-def speed(ctx, args):
+def speed(gpu, args):
     scene = load_scene(args.scene)
     for elements in args.elements:
         for subdiv in args.subdiv:
             solution = solve(scene, SolveSettings(subdiv=subdiv, elements=elements, max_shots=args.shots,
-                                                  tolerance=1e-9), ctx=ctx)
-            r = solution.report
+                                                  tolerance=1e-9), gpu=gpu)
+            r = solution.report.to_dict()
             t = r["timings"]
             loop = sum(t.get(k, 0.0) for k in ("select", "visibility", "shoot", "mipmap"))
             print(f"speed {args.scene} subdiv {subdiv} ({r['counts']['patches']} patches) elements {elements}x{elements}"
@@ -73,8 +70,8 @@ def main():
     s.add_argument("--elements", type=int, nargs="+", default=[2, 8])
     s.add_argument("--shots", type=int, default=300)
     args = parser.parse_args()
-    ctx = gl.create_context()
-    {"furnace": furnace, "speed": speed}[args.what](ctx, args)
+    with GPU() as gpu:
+        {"furnace": furnace, "speed": speed}[args.what](gpu, args)
 
 
 if __name__ == "__main__":

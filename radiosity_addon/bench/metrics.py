@@ -1,4 +1,4 @@
-"""Error metrics (DESIGN.md, Oracles): area-weighted relative RMS, and the worst object's mean.
+"""Error metrics (docs/architecture.md, Oracles): area-weighted relative RMS, and the worst object's mean.
 
 They are taken on the reflected radiance B − E over the surfaces that do not emit (there
 B − E = B): an emitter's own emission is reproduced exactly by every method and would swamp
@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.scene import Scene
+from ..core import Scene
 
 
 def compared_surfaces(scene: Scene, weights: np.ndarray) -> np.ndarray:
     """`weights` (surfaces, ...) with emitting surfaces zeroed, unless every surface emits."""
-    emits = np.array([bool(np.any(s.emission > 0)) for s in scene.surfaces])
+    emits = np.any(scene.emission > 0, axis=1)
     if emits.all():
         return weights
     return np.where(emits.reshape((-1,) + (1,) * (weights.ndim - 1)), 0.0, weights)
@@ -24,7 +24,7 @@ def compared_surfaces(scene: Scene, weights: np.ndarray) -> np.ndarray:
 
 def reflected(scene: Scene, texels: np.ndarray) -> np.ndarray:
     """Texels (surfaces, R, R, 3) less each surface's own emission."""
-    return texels - np.stack([s.emission for s in scene.surfaces])[:, None, None, :]
+    return texels - scene.emission[:, None, None, :]
 
 
 def relative_rms(values: np.ndarray, reference: np.ndarray, weights: np.ndarray) -> float:
@@ -50,8 +50,7 @@ def footprint_rms(values: np.ndarray, reference: np.ndarray, weights: np.ndarray
 def object_means(scene: Scene, values: np.ndarray, weights: np.ndarray) -> dict[str, np.ndarray]:
     """Area-weighted mean RGB per object over the weighted texels (objects with any weight)."""
     means = {}
-    for name in scene.objects:
-        members = [k for k, s in enumerate(scene.surfaces) if s.object_name == name]
+    for name, members in scene.object_surfaces.items():
         w = weights[members][..., None]
         if w.sum() > 0:
             means[name] = (w * values[members]).sum(axis=tuple(range(w.ndim - 1))) / w.sum()

@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.scene import Scene
+from ..core import Scene
 from . import metrics, scenes
 
 
 def cycles_bake(scene: Scene, resolution: int, samples: int, seed: int) -> dict:
-    from ..blender.cycles_reference import bake_scene  # bpy is imported only when Cycles runs
+    from .cycles import bake_scene  # bpy is imported only when Cycles runs
 
     return bake_scene(scene, resolution, samples, seed=seed)
 

@@ -8,8 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..core import gl
-from ..core.scene import load_scene
+from ..core import load_scene, open_gpu
 from . import report, sweep, table51
 from .scenes import ANALYTIC_SCENES
 
@@ -27,22 +26,22 @@ def run_bench(output_dir: Path, quick: bool, cache_dir: Path | None = None, tabl
     started = time.perf_counter()
     machine = {"cpus": os.cpu_count(), "platform": platform.platform(), "load_average_at_start": os.getloadavg()}
     rows, notes = [], {}
-    with gl.gl_context() as ctx:
+    with open_gpu() as gpu:
         for name in scenes:
             scene = ANALYTIC_SCENES[name]() if name in ANALYTIC_SCENES else load_scene(name)
             log(f"{name}:")
-            scene_rows, notes[name] = sweep.sweep_scene(name, scene, plan, ctx, cache_dir, log)
+            scene_rows, notes[name] = sweep.sweep_scene(name, scene, plan, gpu, cache_dir, log)
             rows += scene_rows
         report.mark_pareto(rows)
         machine["load_average_after_sweep"] = os.getloadavg()  # the timings are only as quiet as the machine
-        machine["gl_renderer"] = ctx.info.get("GL_RENDERER")
+        machine["gl_renderer"] = gpu.ctx.info.get("GL_RENDERER")
         report.write_json(output_dir / "accuracy_vs_time.json", rows, notes, machine)
         (output_dir / "accuracy_vs_time.md").write_text(report.markdown(rows, notes, machine))
         report.plot(output_dir / "accuracy_vs_time.png", rows, notes)
         samples = table51_samples if table51_samples is not None else (5 if quick else table51.SAMPLES)
         if samples > 0:
             log("Table 5.1:")
-            measured = table51.measure(ctx, samples, log=log)
+            measured = table51.measure(gpu, samples, log=log)
             machine["load_average_after_table_5_1"] = os.getloadavg()
             table51.write(output_dir, measured, report.machine_line(
                 machine | {"load_average_after_sweep": machine["load_average_after_table_5_1"]}))

@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.form_factor_kernels import point_to_polygon
-from ..core.scene import Scene, scene_from_dict
+from ..core import Scene, point_to_polygon, scene_from_dict
 from .texels import sample_parameters, surface_points
 
 FURNACE_REFLECTANCE = 0.9
@@ -31,7 +30,7 @@ CUBE_FACES = {
 
 
 def opposed_rectangles_form_factor(a: float, b: float, c: float) -> float:
-    """Exact F between opposed equal a x b rectangles at distance c (DESIGN.md)."""
+    """Exact F between opposed equal a x b rectangles at distance c (docs/architecture.md, Oracles)."""
     x, y = a / c, b / c
     return 2 / (np.pi * x * y) * (
         np.log(np.sqrt((1 + x * x) * (1 + y * y) / (1 + x * x + y * y)))
@@ -66,7 +65,7 @@ def exact_texels(name: str, scene: Scene, resolution: int) -> np.ndarray:
         texels[:] = FURNACE_EMISSION / (1 - FURNACE_REFLECTANCE)
         return texels
     if name == "plates":
-        receiver, emitter = scene.surfaces
+        receiver, emitter = scene.surface(0), scene.surface(1)
         s, t = sample_parameters(resolution)
         factor = point_to_polygon_form_factor(surface_points(receiver, s, t), receiver.normal, emitter.vertices)
         texels[0] = (PLATES_REFLECTANCE * PLATES_EMISSION * factor.mean(axis=2))[..., None]
@@ -80,7 +79,7 @@ ANALYTIC_SCENES = {"furnace": furnace_scene, "plates": plates_scene}
 
 def point_to_polygon_form_factor(points: np.ndarray, normal: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     """Lambert's exact form factor from differential areas at `points` (..., 3), all with `normal`,
-    to one polygon (k, 3) in front of them (core/form_factor_kernels.point_to_polygon)."""
+    to one polygon (k, 3) in front of them (core.point_to_polygon)."""
     flat = points.reshape(-1, 3)
     factor = point_to_polygon(flat, np.broadcast_to(normal, flat.shape), np.asarray(polygon, dtype=float)[None])
     return factor[:, 0].reshape(points.shape[:-1])

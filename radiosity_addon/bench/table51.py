@@ -1,6 +1,6 @@
 """The dissertation's Table 5.1 reproduced: linear-solve time vs patch count on the Cornell box.
 
-Their setup: the form-factor matrix of the original method for 69 ... 2449 patches, 30 timed
+Their setup: the form-factor matrix of the hemi-cube method for 69 ... 2449 patches, 30 timed
 solves per solver, stopping when the largest change falls under two decimal places. Their box
 had one more surface (a 2 x 2 triangle pair for the left wall gives us 17 surfaces), so our
 counts are 17 n²: 68, 153, ..., 2448. With the light at about 1 (8-bit colours), "under two
@@ -17,9 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import hemicube, linear_solvers
-from ..core.patches import subdivide
-from ..core.scene import load_scene
+from ..core import Convergence, form_factor_matrix, load_scene, solve_linear, subdivide
 
 SAMPLES = 30
 SUBDIVISIONS = tuple(range(2, 13))  # 17 n² patches: 68 ... 2448
@@ -43,29 +41,29 @@ DISSERTATION = {
 }
 
 
-def timed_solves(ctx, solver: str, form_factors, patches, tolerance: float, samples: int):
+def timed_solves(gpu, solver: str, form_factors, patches, tolerance: float, samples: int):
     """Milliseconds of `samples` solves (after one untimed warm-up) and the iterations of the last."""
     times = []
     for sample in range(samples + 1):
-        monitor = linear_solvers.Convergence(solver, tolerance, 100_000)
+        monitor = Convergence(solver, tolerance, 100_000)
         started = time.perf_counter()
-        linear_solvers.solve_linear(ctx, solver, form_factors, patches.reflectance, patches.emission, monitor)
+        solve_linear(gpu, solver, form_factors, patches.reflectance, patches.emission, monitor)
         if sample:
             times.append(1e3 * (time.perf_counter() - started))
     return np.array(times), monitor.iterations
 
 
-def measure(ctx, samples: int = SAMPLES, subdivisions=SUBDIVISIONS, log=print) -> list[dict]:
+def measure(gpu, samples: int = SAMPLES, subdivisions=SUBDIVISIONS, log=print) -> list[dict]:
     scene = load_scene("cornell-box")
     rows = []
     for n in subdivisions:
         patches = subdivide(scene, n)
-        form_factors = hemicube.form_factor_matrix(ctx, patches, HEMICUBE_RESOLUTION, scene.diameter)
+        form_factors = form_factor_matrix(gpu, patches, HEMICUBE_RESOLUTION, scene.diameter)
         for label, tolerance in TOLERANCES.items():
             row = {"patches": len(patches), "dissertation_patches": len(patches) + 1, "tolerance": tolerance,
                    "rule": label, "solvers": {}}
             for column, solver in SOLVERS.items():
-                times, iterations = timed_solves(ctx, solver, form_factors, patches, tolerance, samples)
+                times, iterations = timed_solves(gpu, solver, form_factors, patches, tolerance, samples)
                 row["solvers"][column] = {"mean_ms": float(times.mean()), "std_ms": float(times.std(ddof=1)),
                                           "iterations": iterations, "samples": samples}
             log(f"  {len(patches)} patches, tol {tolerance:g}: " + ", ".join(

@@ -1,7 +1,7 @@
 """A common texel grid on which every answer is compared: Cycles bakes, exact answers, our solutions.
 
 Each surface has an R x R grid over its own parameters (s, t) in [0, 1]² — bilinear for
-quads, barycentric (b1 = s, b2 = t) for triangles — the parameters `core.patches.subdivide`
+quads, barycentric (b1 = s, b2 = t) for triangles — the parameters `core.subdivide`
 splits on and `blender.cycles_reference` lays its UVs by. Texel (row, column) covers
 s in [column/R, (column+1)/R], t in [row/R, (row+1)/R].
 
@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.patches import Patches, bilinear
-from ..core.scene import Scene
+from ..core import Patches, Scene, bilinear
 
 EDGE_TEXELS = 2
 SUPERSAMPLES = 4  # per texel side: our piecewise-constant answer is averaged over the texel like a bake
@@ -33,10 +32,11 @@ def covered_mask(is_triangle: bool, resolution: int) -> np.ndarray:
 
 def texel_weights(scene: Scene, resolution: int) -> np.ndarray:
     """(surfaces, R, R): world area of each covered texel, 0 for texels not compared."""
-    weights = np.zeros((len(scene.surfaces), resolution, resolution))
-    for index, surface in enumerate(scene.surfaces):
-        uv_area = 0.5 if surface.is_triangle else 1.0
-        weights[index] = covered_mask(surface.is_triangle, resolution) * surface.area / uv_area / resolution**2
+    weights = np.zeros((len(scene), resolution, resolution))
+    for index in range(len(scene)):
+        triangle = bool(scene.is_triangle[index])
+        uv_area = 0.5 if triangle else 1.0
+        weights[index] = covered_mask(triangle, resolution) * scene.area[index] / uv_area / resolution**2
     return weights
 
 
@@ -59,16 +59,17 @@ def surface_points(surface, s: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def _patch_lookup(patches: Patches, surface_count: int) -> np.ndarray:
-    """(surfaces, n, 2n) patch index by (surface, grid row, grid column); -1 where none."""
-    n = patches.subdiv
+    """(surfaces, rows, 2 columns) patch index by (surface, grid row, grid column); -1 where none."""
+    n = int(patches.split.max())
     lookup = np.full((surface_count, n, 2 * n), -1, dtype=np.int64)
     lookup[patches.surface, patches.grid[:, 0], patches.grid[:, 1]] = np.arange(len(patches))
     return lookup
 
 
-def _locate(is_triangle: bool, n: int, s: np.ndarray, t: np.ndarray):
-    """Grid row, grid column and in-patch (s, t) of parameters on an n x n split (see patches.py)."""
-    scaled_s, scaled_t = np.clip(s * n, 0, n - 1e-9), np.clip(t * n, 0, n - 1e-9)
+def _locate(is_triangle: bool, split, s: np.ndarray, t: np.ndarray):
+    """Grid row, grid column and in-patch (s, t) of parameters on a (columns, rows) split (core.subdivide)."""
+    columns, rows = int(split[0]), int(split[1])
+    scaled_s, scaled_t = np.clip(s * columns, 0, columns - 1e-9), np.clip(t * rows, 0, rows - 1e-9)
     column, row = np.floor(scaled_s).astype(np.int64), np.floor(scaled_t).astype(np.int64)
     local_s, local_t = scaled_s - column, scaled_t - row
     if not is_triangle:
@@ -79,29 +80,29 @@ def _locate(is_triangle: bool, n: int, s: np.ndarray, t: np.ndarray):
 
 def surface_grid(patches: Patches, surface_index: int, patch_radiosity: np.ndarray,
                  element_radiosity: np.ndarray | None) -> np.ndarray:
-    """(m, m, 3) values of a quad surface on its regular grid of patches (m = n) or elements
-    (m = n·S), indexed [t row, s column]."""
-    n = patches.subdiv
+    """(rows·S, columns·S, 3) values of a quad surface on its regular grid of patches (S = 1) or
+    elements, indexed [t row, s column]."""
+    n_columns, n_rows = (int(v) for v in patches.split[surface_index])
     members = np.flatnonzero(patches.surface == surface_index)
     rows, columns = patches.grid[members, 0], patches.grid[members, 1]
     if element_radiosity is None:
-        grid = np.zeros((n, n, 3))
+        grid = np.zeros((n_rows, n_columns, 3))
         grid[rows, columns] = patch_radiosity[members]
         return grid
     size = element_radiosity.shape[1]
-    grid = np.zeros((n, size, n, size, 3))
+    grid = np.zeros((n_rows, size, n_columns, size, 3))
     grid[rows, :, columns, :] = element_radiosity[members]
-    return grid.reshape(n * size, n * size, 3)
+    return grid.reshape(n_rows * size, n_columns * size, 3)
 
 
 def bilinear_on_grid(grid: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Bilinear interpolation between cell centres of `grid` (m, m, 3), clamped at the border: what
-    a lightmap with one texel per cell shows under bilinear filtering."""
-    m = grid.shape[0]
-    x, y = np.clip(s * m - 0.5, 0, m - 1), np.clip(t * m - 0.5, 0, m - 1)
-    x0, y0 = np.minimum(np.floor(x).astype(np.int64), m - 2 if m > 1 else 0), np.minimum(
-        np.floor(y).astype(np.int64), m - 2 if m > 1 else 0)
-    x1, y1 = np.minimum(x0 + 1, m - 1), np.minimum(y0 + 1, m - 1)
+    """Bilinear interpolation between cell centres of `grid` (rows, columns, 3), clamped at the border:
+    what a lightmap with one texel per cell shows under bilinear filtering."""
+    my, mx = grid.shape[:2]
+    x, y = np.clip(s * mx - 0.5, 0, mx - 1), np.clip(t * my - 0.5, 0, my - 1)
+    x0 = np.minimum(np.floor(x).astype(np.int64), mx - 2 if mx > 1 else 0)
+    y0 = np.minimum(np.floor(y).astype(np.int64), my - 2 if my > 1 else 0)
+    x1, y1 = np.minimum(x0 + 1, mx - 1), np.minimum(y0 + 1, my - 1)
     fx, fy = (x - x0)[..., None], (y - y0)[..., None]
     return ((1 - fy) * ((1 - fx) * grid[y0, x0] + fx * grid[y0, x1])
             + fy * ((1 - fx) * grid[y1, x0] + fx * grid[y1, x1]))
@@ -115,18 +116,19 @@ def solution_texels(scene: Scene, patches: Patches, patch_radiosity: np.ndarray,
     constant, or with `interpolate` bilinear between cell centres on quad surfaces (as a lightmap
     shows it; triangle surfaces stay piecewise constant).
     """
-    lookup = _patch_lookup(patches, len(scene.surfaces))
+    lookup = _patch_lookup(patches, len(scene))
     s, t = sample_parameters(resolution)
-    texels = np.zeros((len(scene.surfaces), resolution, resolution, 3))
-    for index, surface in enumerate(scene.surfaces):
-        if interpolate and not surface.is_triangle:
+    texels = np.zeros((len(scene), resolution, resolution, 3))
+    for index in range(len(scene)):
+        triangle = bool(scene.is_triangle[index])
+        if interpolate and not triangle:
             grid = surface_grid(patches, index, patch_radiosity, element_radiosity)
             texels[index] = bilinear_on_grid(grid, s, t).mean(axis=2)
             continue
-        row, column, local_s, local_t = _locate(surface.is_triangle, patches.subdiv, s, t)
+        row, column, local_s, local_t = _locate(triangle, patches.split[index], s, t)
         patch = lookup[index, row, column]
         values = patch_radiosity[patch]
-        if element_radiosity is not None and not surface.is_triangle:
+        if element_radiosity is not None and not triangle:
             size = element_radiosity.shape[1]
             element_t = np.minimum((local_t * size).astype(np.int64), size - 1)
             element_s = np.minimum((local_s * size).astype(np.int64), size - 1)
@@ -137,10 +139,10 @@ def solution_texels(scene: Scene, patches: Patches, patch_radiosity: np.ndarray,
 
 def texel_patches(scene: Scene, patches: Patches, resolution: int) -> np.ndarray:
     """(surfaces, R, R) index of the patch holding each texel's centre (meaningful on covered texels)."""
-    lookup = _patch_lookup(patches, len(scene.surfaces))
+    lookup = _patch_lookup(patches, len(scene))
     s, t = sample_parameters(resolution, supersamples=1)
-    owners = np.zeros((len(scene.surfaces), resolution, resolution), dtype=np.int64)
-    for index, surface in enumerate(scene.surfaces):
-        row, column, _, _ = _locate(surface.is_triangle, patches.subdiv, s[..., 0], t[..., 0])
+    owners = np.zeros((len(scene), resolution, resolution), dtype=np.int64)
+    for index in range(len(scene)):
+        row, column, _, _ = _locate(bool(scene.is_triangle[index]), patches.split[index], s[..., 0], t[..., 0])
         owners[index] = lookup[index, row, column]
     return owners

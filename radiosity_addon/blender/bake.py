@@ -11,19 +11,18 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..core.effects import effects_summary
-from ..core.gl import GLUnavailable
-from ..core.scene import SceneError
-from ..core.solution import SolveCancelled, SolveError
+from ..core import USER_ERRORS as CORE_USER_ERRORS
+from ..core import SolveCancelled, SolveError
 from . import apply
 from .errors import BakeError
 from .export import export_scene
 from .lightmap_uv import add_lightmap_uvs, remove_lightmap_uvs
-from .lights import scene_lamps
+from .lights import render_lamps
+from .options import BakeOptions
 from .worker import BakeWorker
 
 # errors the user can cause: reported as their message, one line
-USER_ERRORS = (BakeError, SceneError, SolveError, GLUnavailable, FileNotFoundError)
+USER_ERRORS = (BakeError,) + CORE_USER_ERRORS
 
 
 @dataclass
@@ -35,7 +34,7 @@ class BakePlan:
     added_uv_meshes: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
     started: float = field(default_factory=time.monotonic)
-    report: dict = field(default_factory=dict)  # the solve's report, once finished
+    report: dict = field(default_factory=dict)  # the solve's report (its JSON), once finished
     scene: object = None  # the bpy scene baked: its settings record what the bake simulated
     summary: str = ""
 
@@ -54,33 +53,31 @@ def choose_objects(context, objects=None) -> list:
     return meshes
 
 
-def prepare(context, settings, objects=None, output_dir=None) -> BakePlan:
+def prepare(context, options: BakeOptions, objects=None, output_dir=None) -> BakePlan:
     """Check, export and hand the solve to a worker (not yet started)."""
     baked = choose_objects(context, objects)
-    solve_settings = settings.solve_settings()
     try:
-        solve_settings.validate()
+        options.solve.validate()
+        options.lightmaps.validate()
     except SolveError as error:
         raise BakeError(str(error)) from None
-    output = "EXR" if output_dir is not None else settings.output
+    output = "EXR" if output_dir is not None else options.output
     directory = Path(output_dir) if output_dir is not None else apply.default_exr_directory()
     apply.check_output(output, directory)
 
     occluders = []
-    if settings.include_unselected:
+    if options.include_unselected:
         baked_names = {obj.name for obj in baked}
         occluders = [obj for obj in context.view_layer.objects
                      if obj.type == "MESH" and obj.name not in baked_names and obj.visible_get()]
-    added = add_lightmap_uvs(baked, settings.uv_margin)
+    added = add_lightmap_uvs(context, baked, options.uv_margin)
     try:
         exported = export_scene(context.evaluated_depsgraph_get(), baked, occluders,
-                                patch_size=settings.patch_size if settings.patch_mode == "SIZE" else 0.0,
-                                lamps=scene_lamps(context.view_layer), world=context.scene.world)
+                                lamps=render_lamps(context.view_layer), world=context.scene.world)
     except BaseException:
         remove_lightmap_uvs(added)
         raise
-    worker = BakeWorker(exported.scene, solve_settings, exported.baked_objects,
-                        settings.lightmap_options(baked))
+    worker = BakeWorker(exported.scene, options.solve, exported.baked_objects, options.lightmaps)
     warnings = list(exported.warnings)
     return BakePlan(objects=baked, worker=worker, output=output, directory=directory,
                     added_uv_meshes=added, warnings=warnings, scene=context.scene)
@@ -102,7 +99,7 @@ def finish(plan: BakePlan) -> str:
             raise BakeError(str(error)) from None
         raise error if error is not None else BakeError("the bake stopped without a result")
     images, report = worker.result
-    plan.report = report
+    plan.report = report.to_dict()
     try:
         written = apply.write_images(images, plan.output, plan.directory)
     except BaseException:
@@ -116,16 +113,16 @@ def finish(plan: BakePlan) -> str:
         rollback(plan)
         raise
     seconds = time.monotonic() - plan.started
-    plan.scene.radiosity.last_bake = effects_summary(report)
-    counts = report.get("counts", {})
-    return (f"baked {len(plan.objects)} object(s) in {seconds:.1f} s ({report.get('method')},"
-            f" {counts.get('patches', '?')} patches)")
+    plan.scene.radiosity.last_bake = report.summary_line()
+    return (f"baked {len(plan.objects)} object(s) in {seconds:.1f} s ({report.method},"
+            f" {report.counts.patches} patches)")
 
 
-def bake_blocking(context, settings, objects=None, output_dir=None, should_cancel=None, on_progress=None):
+def bake_blocking(context, options: BakeOptions, objects=None, output_dir=None, should_cancel=None,
+                  on_progress=None):
     """Scripts, background mode and the command line: the whole bake, waiting for the worker.
     Returns the finished plan: its summary line, warnings and the solve's report."""
-    plan = prepare(context, settings, objects, output_dir)
+    plan = prepare(context, options, objects, output_dir)
     plan.worker.start()
     try:
         while not plan.worker.wait(0.1):

@@ -8,37 +8,26 @@ the operator and saves EXRs and/or a copy of the file.
 from __future__ import annotations
 
 import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import bpy
 
-from ..core.solution import SolveSettings
 from .bake import bake_blocking
 from .errors import BakeError
 
 
-class CommandLineSettings:
-    """scene.radiosity with the solver settings replaced by the command line's (which has more knobs)."""
-
-    def __init__(self, scene_settings, solve_settings: SolveSettings, texel_density=None, max_resolution=None,
-                 patch_size=None):
-        self._scene_settings = scene_settings
-        self._solve_settings = solve_settings
-        # --patch-size splits faces in the export; without it --subdiv splits every face N x N
-        self.patch_mode = "SIZE" if patch_size else "SUBDIVISION"
-        self.patch_size = patch_size or 0.0
-        if patch_size:
-            solve_settings.subdiv = 1
-        if texel_density is not None:
-            scene_settings.texel_density = texel_density
-        if max_resolution is not None:
-            scene_settings.max_resolution = max_resolution
-
-    def solve_settings(self) -> SolveSettings:
-        return self._solve_settings
-
-    def __getattr__(self, name):
-        return getattr(self._scene_settings, name)
+@dataclass
+class HeadlessBake:
+    """A bake of a .blend without the UI: the file's own settings, with the given ones replaced."""
+    file: str
+    solve_options: dict = field(default_factory=dict)  # SolveSettings fields to replace
+    lightmap_options: dict = field(default_factory=dict)  # LightmapSettings fields to replace
+    objects: str | None = None  # "A,B": the objects to bake (default: every visible mesh)
+    output_dir: str | None = None  # EXR lightmaps into this folder
+    save_as: str | None = None  # the baked file
+    preview: str | None = None  # a Cycles render of the baked file
+    preview_size: int = 256
 
 
 def ensure_registered() -> None:
@@ -80,34 +69,30 @@ def render_preview(path: Path, size: int = 256, samples: int = 8) -> None:
     bpy.ops.render.render(write_still=True)
 
 
-def bake_file(blend: str, solve_settings: SolveSettings, objects: str | None = None, output_dir: str | None = None,
-              save_as: str | None = None, preview: str | None = None, texel_density: float | None = None,
-              max_resolution: int | None = None, preview_size: int = 256, patch_size: float | None = None,
-              progress=None):
-    """Bake FILE.blend; returns (summary line, the solve's report). User errors raise BakeError (one line)."""
-    path = Path(blend)
+def bake_file(request: HeadlessBake, progress=None):
+    """Bake the file; returns (summary line, the solve's report dict). User errors raise BakeError
+    (one line). The settings stored in the file (`scene.radiosity`) are read, never changed."""
+    path = Path(request.file)
     if not path.is_file():
-        raise BakeError(f"file '{blend}' does not exist")
-    if output_dir is None and save_as is None:
+        raise BakeError(f"file '{request.file}' does not exist")
+    if request.output_dir is None and request.save_as is None:
         raise BakeError("nothing would be kept: give --output-dir DIR (EXR lightmaps) and/or --save-as OUT.blend")
     bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
     ensure_registered()
-    scene = bpy.context.scene
-    if patch_size is not None and not patch_size > 0:
-        raise BakeError(f"--patch-size must be positive, got {patch_size}")
-    settings = CommandLineSettings(scene.radiosity, solve_settings, texel_density, max_resolution, patch_size)
-    if output_dir is None:
-        scene.radiosity.output = "PACK"
-    plan = bake_blocking(bpy.context, settings, objects=chosen_objects(objects),
-                         output_dir=Path(output_dir).resolve() if output_dir else None, on_progress=progress)
+    objects = chosen_objects(request.objects)
+    options = bpy.context.scene.radiosity.bake_options(objects).overridden(request.solve_options,
+                                                                           request.lightmap_options)
+    if request.output_dir is None:
+        options.output = "PACK"
+    plan = bake_blocking(bpy.context, options, objects=objects,
+                         output_dir=Path(request.output_dir).resolve() if request.output_dir else None,
+                         on_progress=progress)
     for line in plan.warnings:
         print(f"warning: {line}", file=sys.stderr)
-    if save_as is not None:
-        target = Path(save_as).resolve()
+    if request.save_as is not None:
+        target = Path(request.save_as).resolve()
         target.parent.mkdir(parents=True, exist_ok=True)
         bpy.ops.wm.save_as_mainfile(filepath=str(target), relative_remap=True)
-    if preview is not None:
-        render_preview(Path(preview).resolve(), preview_size)
+    if request.preview is not None:
+        render_preview(Path(request.preview).resolve(), request.preview_size)
     return plan.summary, plan.report
-
-

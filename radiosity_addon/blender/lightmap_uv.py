@@ -22,10 +22,10 @@ def meshes_without_lightmap_uv(objects) -> list:
     return list(meshes.values())
 
 
-def add_lightmap_uvs(objects, margin: float) -> list:
-    """Give every mesh of `objects` lacking one a packed 'Lightmap' UV map; returns the meshes changed.
-    On failure nothing stays changed."""
-    from bl_operators.uvcalc_lightmap import lightmap_uvpack
+def add_lightmap_uvs(context, objects, margin: float) -> list:
+    """Give every mesh of `objects` lacking one a packed 'Lightmap' UV map (Blender's Lightmap
+    Pack operator); returns the meshes changed. On failure nothing stays changed."""
+    import bpy
 
     meshes = meshes_without_lightmap_uv(objects)
     for mesh in meshes:
@@ -40,6 +40,8 @@ def add_lightmap_uvs(objects, margin: float) -> list:
         mesh.vertices.foreach_get("co", positions)
         if not np.all(np.isfinite(positions)):
             raise BakeError(f"mesh '{mesh.name}' has vertices at NaN or infinite positions")
+    # one object per mesh: the operator packs the meshes of the selected objects
+    owners = list({obj.data.name: obj for obj in objects if obj.data in meshes}.values())
     changed = []
     try:
         for mesh in meshes:
@@ -47,16 +49,17 @@ def add_lightmap_uvs(objects, margin: float) -> list:
             layer = mesh.uv_layers.new(name=LIGHTMAP_UV, do_init=False)
             changed.append((mesh, previous_active))
             mesh.uv_layers.active = layer
-        if meshes:
+        if owners:
             # Lightmap Pack writes into the active UV map and chats on stdout
-            with contextlib.redirect_stdout(io.StringIO()):
+            with contextlib.redirect_stdout(io.StringIO()), \
+                    context.temp_override(selected_objects=owners, active_object=owners[0], object=owners[0]):
                 try:
-                    lightmap_uvpack(meshes, PREF_SEL_ONLY=False, PREF_NEW_UVLAYER=False, PREF_PACK_IN_ONE=False,
-                                    PREF_BOX_DIV=12, PREF_MARGIN_DIV=int(1.0 / (margin / 100.0)))
-                except (ArithmeticError, ValueError, IndexError) as error:  # degenerate input to Blender's packer
+                    bpy.ops.uv.lightmap_pack(PREF_CONTEXT="ALL_FACES", PREF_PACK_IN_ONE=False, PREF_NEW_UVLAYER=False,
+                                             PREF_BOX_DIV=12, PREF_MARGIN_DIV=margin)
+                except RuntimeError as error:  # degenerate input to Blender's packer
                     names = ", ".join(f"'{mesh.name}'" for mesh in meshes)
-                    raise BakeError(f"Lightmap Pack failed on {names} ({type(error).__name__}); give the mesh a"
-                                    f" '{LIGHTMAP_UV}' UV map yourself") from None
+                    raise BakeError(f"Lightmap Pack failed on {names} ({str(error).strip().splitlines()[-1]});"
+                                    f" give the mesh a '{LIGHTMAP_UV}' UV map yourself") from None
         for mesh, previous_active in changed:
             mesh.uv_layers.active_index = max(previous_active, 0)
             mesh[CREATED_UV] = True

@@ -1,6 +1,6 @@
 """Blender lamps and the world colour -> the scene's `extras` ("lights", "world").
 
-The core turns these into shooters of their own (DESIGN.md, Interfaces); here they
+The core turns these into shooters of their own (docs/architecture.md, Lamps); here they
 are only read out of Blender, in world space:
 
 - point / spot: `position`, `color`, `power` (Watts, `energy` x 2^exposure); spot adds
@@ -26,16 +26,18 @@ import math
 import bpy
 import numpy as np
 
+from .materials import try_image_average
+
 EQUAL_AREA = math.sqrt(math.pi) / 2  # a disk of diameter d has the area of a square of side d * this
 
 
-def scene_lamps(view_layer) -> list:
+def render_lamps(view_layer) -> list:
     """The lamps that light a render of this view layer: visible and not disabled in renders."""
     return [obj for obj in view_layer.objects
             if obj.type == "LIGHT" and obj.visible_get(view_layer=view_layer) and not obj.hide_render]
 
 
-def _vector(values) -> list[float]:
+def as_list(values) -> list[float]:
     return [float(v) for v in values]
 
 
@@ -79,23 +81,23 @@ class LightReader:
             self.warn(obj, "its transform is degenerate (zero scale); skipped")
             return None
         direction = direction / np.linalg.norm(direction)
-        entry = {"name": obj.name, "type": light.type.lower(), "color": _vector(color)}
+        entry = {"name": obj.name, "type": light.type.lower(), "color": as_list(color)}
         if light.type in ("POINT", "SPOT"):
             if not getattr(light, "normalize", True) and light.shadow_soft_size > 0:
                 energy *= 4 * math.pi * light.shadow_soft_size ** 2  # Cycles: power per sphere area
-            entry.update(position=_vector(origin), power=energy)
+            entry.update(position=as_list(origin), power=energy)
             if light.type == "SPOT":
                 if light.use_square:
                     self.warn(obj, "a square spot is baked as a round cone")
                 scale = np.linalg.norm(axes[:, :2], axis=0)
                 if not np.isclose(scale[0], scale[1], rtol=1e-3):
                     self.warn(obj, "its scale makes the cone elliptic; baked as a round cone")
-                entry.update(direction=_vector(direction), spot_size=float(light.spot_size),
+                entry.update(direction=as_list(direction), spot_size=float(light.spot_size),
                              spot_blend=float(light.spot_blend))
         elif light.type == "SUN":
             if not getattr(light, "normalize", True) and light.angle > 0:
                 energy *= math.pi * math.sin(light.angle / 2) ** 2  # Cycles: strength per disk of the sky
-            entry.update(direction=_vector(direction), strength=energy)
+            entry.update(direction=as_list(direction), strength=energy)
         elif light.type == "AREA":
             corners = self.area_corners(obj, light, matrix)
             if corners is None:
@@ -105,7 +107,7 @@ class LightReader:
                 energy *= float(np.linalg.norm(np.cross(edge_u, edge_v)))  # Cycles: power per unit area
             if getattr(light, "spread", math.pi) < math.pi - 1e-4:
                 self.warn(obj, "its spread is narrower than 180 degrees; baked as a fully diffuse emitter")
-            entry.update(vertices=[_vector(c) for c in corners], power=energy)
+            entry.update(vertices=[as_list(c) for c in corners], power=energy)
         else:
             self.warn(obj, f"lamp type {light.type} is not supported; skipped")
             return None
@@ -144,7 +146,7 @@ def world_colour(world, warnings: list[str]) -> list[float] | None:
         colour = _world_nodes(world, tree, warnings)
     if colour is None or not np.all(np.isfinite(colour)) or not np.any(colour > 0):
         return None
-    return _vector(np.clip(colour, 0.0, None))
+    return as_list(np.clip(colour, 0.0, None))
 
 
 def _world_nodes(world, tree, warnings):
@@ -166,8 +168,6 @@ def _world_nodes(world, tree, warnings):
         source = colour_socket.links[0].from_node
         average = None
         if source.bl_idname in ("ShaderNodeTexEnvironment", "ShaderNodeTexImage") and source.image is not None:
-            from .materials import try_image_average
-
             average = try_image_average(source.image)
         if average is not None:
             colour = np.asarray(average, dtype=np.float64)[:3]

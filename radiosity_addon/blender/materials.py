@@ -1,7 +1,7 @@
 """Blender materials -> (reflectance, emission) in the core's units.
 
 Principled BSDF: Base Color -> reflectance, Emission Color x Strength -> emission
-(DESIGN.md, Units). Diffuse BSDF and Emission shaders map the same way; Add
+(docs/architecture.md, Units). Diffuse BSDF and Emission shaders map the same way; Add
 and Mix shaders combine their inputs. A texture on a colour input is replaced
 by its average colour, anything else by a grey default: both with a warning,
 since the bake then cannot match what the user sees.

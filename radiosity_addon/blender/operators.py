@@ -6,9 +6,9 @@ import traceback
 
 import bpy
 
-from ..core.solution import SolveCancelled
+from ..core import SolveCancelled
 from . import apply
-from .bake import USER_ERRORS, BakePlan, bake_blocking, finish, prepare
+from .bake import USER_ERRORS, BakePlan, bake_blocking, choose_objects, finish, prepare
 
 # The one bake running in the UI (the panel draws its progress); None when idle.
 running: BakePlan | None = None
@@ -58,7 +58,8 @@ class RADIOSITY_OT_bake(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            plan = bake_blocking(context, context.scene.radiosity)
+            objects = choose_objects(context)
+            plan = bake_blocking(context, context.scene.radiosity.bake_options(objects), objects)
         except Exception as error:
             return _report_failure(self, error)
         for line in plan.warnings:
@@ -71,7 +72,8 @@ class RADIOSITY_OT_bake(bpy.types.Operator):
         if bpy.app.background or context.window is None:
             return self.execute(context)
         try:
-            plan = prepare(context, context.scene.radiosity)
+            objects = choose_objects(context)
+            plan = prepare(context, context.scene.radiosity.bake_options(objects), objects)
         except Exception as error:
             return _report_failure(self, error)
         for line in plan.warnings:

@@ -5,16 +5,17 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
-from ..core.solution import SolveSettings
-from .worker import LightmapOptions
+from ..core import MAX_LIGHTMAP_SIZE, PATCH_SIZE, TEXEL_DENSITY, LightmapSettings, SolveSettings
+from .options import BakeOptions
 
 _DEFAULTS = SolveSettings()
+_OPTIONS = BakeOptions()
 
 METHOD_ITEMS = [
     ("progressive", "Progressive", "Progressive refinement on the GPU: shoots the brightest patch first"
                                    " (fast, the default)"),
-    ("hemicube", "Hemi-cube", "The original method: hemi-cube form factors and a linear solve"
-                              " (memory grows with patches squared)"),
+    ("hemicube", "Hemi-cube", "The hemi-cube method (the dissertation's original): hemi-cube form factors"
+                              " and a linear solve (memory grows with patches squared)"),
 ]
 SOLVER_ITEMS = [
     ("jacobi-gpu", "Jacobi (GPU)", "Jacobi iterations in a compute shader"),
@@ -34,9 +35,9 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
         ("SIZE", "Patch Size", "Split faces into patches about Patch Size across; smaller faces stay one patch"),
         ("SUBDIVISION", "Subdivision", "Split every face N x N, however big or small"),
     ])
-    patch_size: FloatProperty(name="Patch Size", min=0.001, soft_max=10.0, default=0.5, unit="LENGTH",
+    patch_size: FloatProperty(name="Patch Size", min=0.001, soft_max=10.0, default=PATCH_SIZE, unit="LENGTH",
                               description="Largest patch edge: faces longer than this are split")
-    subdivision: IntProperty(name="Subdivision", min=1, soft_max=16, max=64, default=_DEFAULTS.subdiv,
+    subdivision: IntProperty(name="Subdivision", min=1, soft_max=16, max=64, default=4,
                              description="Each face is split N x N into patches (triangles into N² triangles)")
     elements: EnumProperty(name="Elements", items=ELEMENT_ITEMS, default=str(_DEFAULTS.elements),
                            description="Receiving elements per patch (progressive method)")
@@ -48,31 +49,32 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
     tolerance: FloatProperty(name="Tolerance", min=0.0, max=0.5, default=0.0, precision=6, step=0.01,
                              description="Stop when the unshot power (progressive) or the change per sweep"
                                          " (hemi-cube) falls under this fraction; 0 uses the method's default")
-    texel_density: FloatProperty(name="Texel Density", min=1.0, soft_max=1024.0, default=64.0,
+    texel_density: FloatProperty(name="Texel Density", min=1.0, soft_max=1024.0, default=TEXEL_DENSITY,
                                  description="Lightmap texels per metre (objects without a resolution override)")
-    max_resolution: IntProperty(name="Max Resolution", min=8, max=8192, default=1024, subtype="PIXEL",
+    max_resolution: IntProperty(name="Max Resolution", min=8, max=8192, default=MAX_LIGHTMAP_SIZE, subtype="PIXEL",
                                 description="Largest lightmap side in texels")
-    uv_margin: FloatProperty(name="UV Margin", min=0.001, max=1.0, default=0.1,
+    uv_margin: FloatProperty(name="UV Margin", min=0.001, max=1.0, default=_OPTIONS.uv_margin,
                              description="Margin of the Lightmap Pack used for meshes without a 'Lightmap'"
                                          " UV map")
     output: EnumProperty(name="Output", items=OUTPUT_ITEMS, default="PACK")
     last_bake: StringProperty(name="Last Bake", default="",
                               description="What the last bake simulated and skipped (scene analysis)")
-    include_unselected: BoolProperty(name="Unselected Occlude", default=True,
+    include_unselected: BoolProperty(name="Unselected Occlude", default=_OPTIONS.include_unselected,
                                      description="Visible unselected meshes block and reflect light"
                                                  " (they get no lightmap)")
 
-    def solve_settings(self) -> SolveSettings:
-        subdiv = 1 if self.patch_mode == "SIZE" else self.subdivision  # SIZE splits faces in the export
-        return SolveSettings(method=self.method, subdiv=subdiv, elements=int(self.elements),
-                             hemicube_res=self.hemicube_resolution, solver=self.solver,
-                             tolerance=self.tolerance or None)
-
-    def lightmap_options(self, objects) -> LightmapOptions:
+    def bake_options(self, objects) -> BakeOptions:
+        """The panel's settings, and the resolution overrides of `objects`, as a plain object."""
         overrides = {obj.name: obj.radiosity.lightmap_resolution for obj in objects
                      if obj.radiosity.lightmap_resolution > 0}
-        return LightmapOptions(texel_density=self.texel_density, max_size=self.max_resolution,
-                               resolution_overrides=overrides)
+        solve = SolveSettings(method=self.method, subdiv=self.subdivision if self.patch_mode == "SUBDIVISION" else None,
+                              patch_size=self.patch_size, elements=int(self.elements),
+                              hemicube_res=self.hemicube_resolution, solver=self.solver,
+                              tolerance=self.tolerance or None)
+        lightmaps = LightmapSettings(texel_density=self.texel_density, max_size=self.max_resolution,
+                                     resolution_overrides=overrides)
+        return BakeOptions(solve=solve, lightmaps=lightmaps, output=self.output,
+                           include_unselected=self.include_unselected, uv_margin=self.uv_margin)
 
 
 class RadiosityObjectSettings(bpy.types.PropertyGroup):

@@ -1,0 +1,97 @@
+"""Radiosity Baker's core: diffuse global illumination by radiosity on the GPU, without Blender.
+
+This is the public API; the command line, the Blender side and the benchmark use only the
+names below. The packages follow the data flow (docs/architecture.md):
+
+    scene -> (visibility, shooting) -> hemicube | progressive -> solve -> lightmap -> preview
+    with gpu (contexts, the GL resource owner) and imaging (gutters, downsampling) underneath.
+
+Scenes
+------
+load_scene(path_or_name, require_emitter=True) -> Scene
+    path_or_name   a scene file (JSON, docs/architecture.md › Scene file) or a bundled scene's
+                   name ("cornell-box").
+    require_emitter  refuse a scene where nothing emits (SceneError).
+scene_from_dict(data, require_emitter=True) -> Scene     the same from a parsed dict.
+save_scene(scene, path)                                  writes the scene file back.
+check_has_emitter(scene)                                 SceneError when nothing emits.
+polygon_faults(corners, corner_count) -> masks           the polygon checks every scene passes
+                                                         (zero area, not planar, not convex).
+Scene                  arrays of surfaces (`corners`, `reflectance`, `emission`, `uv`, objects)
+                       plus `extras` (lights, world, camera); `scene.surface(i)` is one of them.
+
+Solving
+-------
+solve(scene, settings=None, progress=None, should_cancel=None, gpu=None) -> Solution
+    scene          the Scene to solve.
+    settings       SolveSettings (None: the defaults the command line and the panel share):
+                   method "progressive" | "hemicube"; subdiv N (every surface N x N) or, with
+                   subdiv None, patch_size (scene units); elements S (S x S per patch,
+                   progressive); hemicube_res; solver "jacobi-gpu" | "jacobi-cpu" |
+                   "gauss-seidel"; tolerance (None: the method's default); max_iterations;
+                   max_shots; visibility, visibility_res, kernel, shoot_from (progressive);
+                   memory_limit_bytes (the hemi-cube matrix guard); skip_unneeded (simulate
+                   only the effects the scene analysis finds).
+    progress       progress(fraction in [0, 1], message, details dict), called as it goes.
+    should_cancel  should_cancel() -> True stops the solve with SolveCancelled.
+    gpu            a GPU to run on (its program cache is reused); None: a context of its own,
+                   released afterwards. Every GL object a solve makes is released when it
+                   returns or raises.
+Solution               patches, patch_radiosity (P, 3), element_radiosity (P, S, S, 3) or None,
+                       report (Report: `to_dict()` is the report file, `summary_line()` the
+                       panel's one line).
+
+Lightmaps and preview
+---------------------
+bake_lightmaps(scene, solution, settings=None, gpu=None, objects=None) -> {object name: Lightmap}
+    settings       LightmapSettings: texel_density (texels per scene unit), max_size,
+                   resolution_overrides {object: side or (w, h)}, power_of_two, gutter.
+    objects        names of the objects that get a lightmap (default: all; others only
+                   block and reflect light).
+Lightmap               levels (RGBA float32 mip chain, alpha = coverage), filled_image() (for
+                       renderers that build their own mipmaps), surfaces and their surface_uv.
+render_preview(scene, lightmaps, camera=None, width=512, height=512, supersample=2, gpu=None)
+    -> Preview         the scene from `camera` (default: the scene's own, else one that frames
+                       it), lit only by the lightmaps, trilinearly filtered.
+save_preview(path, scene, preview, exposure=None) -> exposure   tone-mapped 8-bit PNG.
+
+Building blocks (the benchmark's Table 5.1 and exact references)
+-----------------------------------------------------------------
+subdivide(scene, subdiv=None, patch_size=0.5) -> Patches     the patches a solve would use.
+bilinear(corners, s, t) -> points                            the bilinear map of patch corners.
+form_factor_matrix(gpu, patches, resolution, scene_diameter, progress=None, should_cancel=None,
+                   rows=None) -> F (P x P float32)            hemi-cube form factors.
+solve_linear(gpu, solver, F, reflectance, emission, Convergence(solver, tolerance, cap)) -> B
+point_to_polygon(points, normals, polygons) -> (M, N)        exact unoccluded point-to-polygon
+                                                             form factors (Lambert's formula).
+
+Errors
+------
+USER_ERRORS = (SceneError, SolveError, SolveCancelled, GLUnavailable, FileNotFoundError): the
+faults a user can cause, each with a one-line message saying what to do.
+"""
+
+from .errors import USER_ERRORS, GLUnavailable, SceneError, SolveCancelled, SolveError
+from .gpu import GPU, open_gpu
+from .hemicube import form_factor_matrix, point_to_polygon, solve_linear
+from .hemicube.linear_solvers import Convergence
+from .lightmap import Lightmap, bake_lightmaps
+from .preview import Camera, Preview, render_preview, save_preview
+from .report import Report
+from .scene.geometry import bilinear
+from .scene import (Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
+                    save_scene, scene_from_dict, subdivide)
+from .settings import (DEFAULT_TOLERANCE, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, PATCH_SIZE, SHOOTING_POINTS, SOLVERS,
+                       TEXEL_DENSITY, VISIBILITY_VARIANTS, LightmapSettings, SolveSettings)
+from .solution import Solution
+from .solve import solve
+
+__all__ = [
+    "Camera", "Convergence", "DEFAULT_TOLERANCE", "GLUnavailable", "GPU", "KERNELS", "Lightmap", "LightmapSettings",
+    "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
+    "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "Surface", "TEXEL_DENSITY",
+    "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",
+    "form_factor_matrix", "polygon_faults",
+    "load_scene", "open_gpu", "point_to_polygon", "render_preview", "save_preview", "save_scene",
+    "scene_from_dict", "solve", "solve_linear", "subdivide",
+]

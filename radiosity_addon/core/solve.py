@@ -1,28 +1,28 @@
-"""The pipeline: scene -> patches -> solve -> Solution with its report.
+"""The pipeline: scene -> analysis -> patches -> a method's solve -> Solution with its report.
 
-Both methods enter here, so callers (CLI, Blender operator, tests, benchmark)
-get the same settings checks, emitter check, timings and report.
+Both methods enter here, so every caller (command line, Blender, tests, benchmark) gets the
+same settings checks, emitter check, timings and report.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import time
 
 import numpy as np
 
-from . import gl
-from .effects import effects_for
-from .patches import subdivide
-from .scene import Scene, check_has_emitter
-from .solution import Solution, SolveSettings, StageTimer
+from .gpu import GPU, open_gpu
+from .hemicube import solve_hemicube
+from .progressive import solve_progressive
+from .report import Counts, Report
+from .scene import Scene, check_has_emitter, effects_for, subdivide
+from .settings import SolveSettings
+from .solution import Solution
+from .timing import ProgressCallback, StageTimer
 
 
-def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, should_cancel=None,
-          ctx=None) -> Solution:
-    """Solve radiosity for `scene`. `progress(fraction, message, details)` is called as it goes;
-    `should_cancel()` returning True stops it with SolveCancelled. Without `ctx`, a standalone
-    OpenGL context is made for this solve and released after it."""
+def solve(scene: Scene, settings: SolveSettings | None = None, progress: ProgressCallback | None = None,
+          should_cancel=None, gpu: GPU | None = None) -> Solution:
+    """Solve radiosity for `scene` (see core/__init__.py for the parameters)."""
     settings = settings or SolveSettings()
     settings.validate()
     check_has_emitter(scene)
@@ -31,32 +31,21 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress=None, sh
     with timer.stage("analyse"):
         effects = effects_for(scene, settings.skip_unneeded)
     with timer.stage("subdivide"):
-        patches = subdivide(scene, settings.subdiv)
-    with gl.gl_context(ctx) as gl_ctx:
+        patches = subdivide(scene, settings.subdiv, settings.patch_size)
+    with open_gpu(gpu) as solve_gpu:
         if settings.method == "hemicube":
-            from .original import solve_original
-
-            radiosity, details, _ = solve_original(gl_ctx, scene, patches, settings, effects,
-                                                   timer, progress, should_cancel)
+            radiosity, details, _ = solve_hemicube(solve_gpu, scene, patches, settings, effects, timer, progress,
+                                                   should_cancel)
             elements = None
         else:
-            from .progressive import solve_progressive
-
-            radiosity, elements, details = solve_progressive(gl_ctx, scene, patches, settings, effects, timer,
+            radiosity, elements, details = solve_progressive(solve_gpu, scene, patches, settings, effects, timer,
                                                              progress, should_cancel)
     timer.timings["total"] = time.perf_counter() - started
-
-    work = details.pop("work", {})
     element_count = len(patches) * (settings.elements ** 2 if elements is not None else 1)
-    report = {
-        "method": settings.method,
-        "settings": settings.as_dict(),
-        "counts": {"surfaces": len(scene.surfaces), "objects": len(scene.objects),
-                   "patches": len(patches), "elements": element_count},
-        "timings": timer.timings,
-        **details,
-        "effects": {**dataclasses.asdict(effects), **work},
-        "radiosity_max": float(np.max(radiosity)),
-    }
+    report = Report(method=settings.method, settings=settings,
+                    counts=Counts(surfaces=len(scene), objects=len(scene.object_names), patches=len(patches),
+                                  elements=element_count),
+                    timings=timer.timings, effects=effects, details=details,
+                    radiosity_max=float(np.max(radiosity)))
     return Solution(patches=patches, patch_radiosity=np.asarray(radiosity, dtype=np.float64),
                     element_radiosity=elements, report=report)

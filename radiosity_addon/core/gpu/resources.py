@@ -1,0 +1,141 @@
+"""The owner of every GL object: a `GPU` (one context and its program cache) hands out
+`Resources` scopes; a scope releases all it made when it closes, on success, on cancel and on
+any exception, so no stage keeps a release list of its own.
+
+A scope also makes its context current while it is open (and the previous one current again
+after), so several contexts in one thread — a caller's and one of its own — never mix."""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+
+from .context import create_context
+from .shaders import includes, shader_source, with_defines
+
+
+_active = threading.local()  # per thread: the contexts made current by `active`, innermost last
+
+
+@contextlib.contextmanager
+def active(ctx):
+    """Make `ctx` current for the block, and the one that was current before again after it.
+    (moderngl's own `with ctx:` leaves no context current on exit, which would strand a caller's.)"""
+    stack = _active.__dict__.setdefault("stack", [])
+    if not stack or stack[-1] is not ctx:
+        ctx.mglo.__enter__()
+    stack.append(ctx)
+    try:
+        yield ctx
+    finally:
+        stack.pop()
+        if stack and stack[-1] is not ctx:
+            stack[-1].mglo.__enter__()
+
+
+class GPU:
+    """An OpenGL context with its compiled programs. Programs are cached per context (keyed by
+    shader files and defines) and released with it; everything else lives in `resources()`."""
+
+    def __init__(self, ctx=None):
+        self.ctx = ctx if ctx is not None else create_context()
+        self._owns_context = ctx is None
+        self._programs: dict[tuple, object] = {}
+        for name, source in includes().items():
+            self.ctx.includes[name] = source
+
+    def program(self, vertex: str, fragment: str | None = None, geometry: str | None = None,
+                defines: dict | None = None):
+        """A linked program from shader files in `shaders/` (cached)."""
+        key = ("program", vertex, fragment, geometry, tuple(sorted((defines or {}).items())))
+        if key not in self._programs:
+            load = lambda name: with_defines(shader_source(name), defines) if name else None  # noqa: E731
+            self._programs[key] = self.ctx.program(vertex_shader=load(vertex), fragment_shader=load(fragment),
+                                                   geometry_shader=load(geometry))
+        return self._programs[key]
+
+    def compute(self, name: str, defines: dict | None = None):
+        """A compute shader from `shaders/name` (cached)."""
+        key = ("compute", name, tuple(sorted((defines or {}).items())))
+        if key not in self._programs:
+            self._programs[key] = self.ctx.compute_shader(with_defines(shader_source(name), defines))
+        return self._programs[key]
+
+    @property
+    def program_count(self) -> int:
+        """Programs compiled on this context so far."""
+        return len(self._programs)
+
+    def resources(self) -> "Resources":
+        return Resources(self)
+
+    def close(self) -> None:
+        with active(self.ctx):
+            for program in self._programs.values():
+                program.release()
+            self._programs.clear()
+        if self._owns_context:
+            self.ctx.release()
+
+    def __enter__(self) -> "GPU":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+@contextlib.contextmanager
+def open_gpu(gpu: GPU | None = None):
+    """Yield `gpu` if given, else a fresh one (its own context) closed on exit."""
+    if gpu is not None:
+        with active(gpu.ctx):
+            yield gpu
+        return
+    with GPU() as own, active(own.ctx):
+        yield own
+
+
+class Resources:
+    """GL objects of one scope (a solve, a bake, a pass), released together, newest first."""
+
+    def __init__(self, gpu: GPU):
+        self.gpu = gpu
+        self.ctx = gpu.ctx
+        self._objects: list = []
+        self._active = None
+
+    def adopt(self, obj):
+        self._objects.append(obj)
+        return obj
+
+    def buffer(self, data: bytes | None = None, reserve: int = 0):
+        return self.adopt(self.ctx.buffer(data, reserve=reserve) if data is not None
+                          else self.ctx.buffer(reserve=max(reserve, 4)))
+
+    def texture(self, size, components: int, data: bytes | None = None, dtype: str = "f1"):
+        return self.adopt(self.ctx.texture(size, components, data, dtype=dtype))
+
+    def depth_renderbuffer(self, size):
+        return self.adopt(self.ctx.depth_renderbuffer(size))
+
+    def framebuffer(self, color_attachments, depth_attachment=None):
+        return self.adopt(self.ctx.framebuffer(color_attachments, depth_attachment))
+
+    def vertex_array(self, program, content, index_buffer=None, index_element_size: int = 4):
+        return self.adopt(self.ctx.vertex_array(program, content, index_buffer=index_buffer,
+                                                index_element_size=index_element_size))
+
+    def release(self) -> None:
+        while self._objects:
+            self._objects.pop().release()
+
+    def __enter__(self) -> "Resources":
+        self._active = active(self.ctx)
+        self._active.__enter__()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        try:
+            self.release()
+        finally:
+            self._active.__exit__(*exc)

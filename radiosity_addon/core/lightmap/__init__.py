@@ -1,0 +1,7 @@
+"""Lightmaps: per-object images in UV space from a solution — charts, lattices, rasterizing,
+gutters and mips."""
+
+from .bake import Lightmap, bake_lightmaps
+from .mips import filled_image, gl_mip_count, mip_levels
+
+__all__ = ["Lightmap", "bake_lightmaps", "filled_image", "gl_mip_count", "mip_levels"]

@@ -1,0 +1,161 @@
+"""Lightmaps: element (or patch) radiosity laid into per-object images in UV space.
+
+Per object (docs/architecture.md, Lightmaps):
+1. Resolution from a texel density, a per-object override and a cap (`size`).
+2. UVs: the scene's `uv` (the Blender exporter's `Lightmap` map) or, when an object has
+   none, an automatic layout (`charts`).
+3. Values: patch lattices continuous across patch borders, chart borders and smooth edges
+   (`lattice`).
+4. The GPU rasterizes every patch's footprint into the atlas (`rasterize`).
+5. Gutters are dilated from the inside and the mip chain is coverage-aware (`mips`).
+
+Images are float32 linear radiance, RGBA, row 0 at v = 0 (the bottom), the order of
+Blender's `image.pixels` and of OpenGL textures. Alpha is coverage: 1 on charts and their
+gutters, 0 elsewhere.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import SceneError, SolveError
+from ..gpu import GPU, open_gpu
+from ..scene import Scene
+from ..settings import LightmapSettings
+from ..solution import Solution
+from . import charts
+from .lattice import continuous_lattice, element_values
+from .mips import filled_image, mip_levels
+from .rasterize import rasterize
+from .size import resolve_size
+
+UV_TOLERANCE = 1e-3  # how far given UVs may stray outside [0, 1]
+
+
+@dataclass
+class Lightmap:
+    object_name: str
+    levels: list[np.ndarray]  # mip chain down to 1 x 1, (h_k, w_k, 4) float32; levels[0] is the image
+    coverage: list[np.ndarray]  # per level, (h_k, w_k) float32: fraction of the texel on charts (alpha adds gutters)
+    patch_index: np.ndarray  # (H, W) int32: patch whose footprint holds the texel centre, -1 if none
+    surfaces: np.ndarray  # (n,) indices of the object's surfaces
+    surface_uv: np.ndarray  # (n, 4, 2) corner UVs the map was baked with (triangles repeat c2)
+    texel_density: float  # achieved texels per scene unit: sqrt(texels inside faces / face area)
+
+    @property
+    def rgba(self) -> np.ndarray:
+        return self.levels[0]
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) in texels."""
+        return self.rgba.shape[1], self.rgba.shape[0]
+
+    def filled_image(self) -> np.ndarray:
+        """Level 0 with every texel outside the charts filled from coarser levels (for renderers
+        that build their own mipmaps, like Blender): float32 (H, W, 4), alpha = coverage."""
+        return filled_image(self.levels)
+
+
+def uv_polygon_area(uv: np.ndarray) -> np.ndarray:
+    """(n,) areas of UV polygons (n, 4, 2) (shoelace; a repeated corner adds nothing)."""
+    x, y = uv[..., 0], uv[..., 1]
+    return 0.5 * np.abs((x * np.roll(y, -1, axis=-1) - y * np.roll(x, -1, axis=-1)).sum(axis=-1))
+
+
+def _given_uvs(scene: Scene, name: str, indices: np.ndarray) -> bool:
+    """True if the object's surfaces all carry UVs, False if none do; mixed or out-of-range is an error."""
+    with_uv = scene.has_uv[indices]
+    if not with_uv.any():
+        return False
+    if not with_uv.all():
+        missing = scene.names[indices[np.flatnonzero(~with_uv)[0]]]
+        raise SceneError(f"object '{name}': surface '{missing}' has no lightmap 'uv' but others of the"
+                         " object do; give every surface of an object UVs, or none")
+    uv = scene.uv[indices]
+    outside = np.flatnonzero((uv.min(axis=(1, 2)) < -UV_TOLERANCE) | (uv.max(axis=(1, 2)) > 1 + UV_TOLERANCE))
+    if len(outside):
+        raise SceneError(f"surface '{scene.names[indices[outside[0]]]}': lightmap UVs leave the [0, 1] square")
+    if uv_polygon_area(uv).sum() <= 0:
+        raise SceneError(f"object '{name}': its lightmap UVs have zero area")
+    return True
+
+
+def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings | None = None,
+                   gpu: GPU | None = None, objects=None) -> dict[str, Lightmap]:
+    """One `Lightmap` per object of `scene` (or of `objects`, names of some of them: objects
+    that only occlude need none), keyed by object name (see core/__init__.py)."""
+    settings = settings or LightmapSettings()
+    settings.validate()
+    all_objects = scene.object_surfaces
+    overrides = {name: size for name, size in settings.resolution_overrides.items() if size}
+    unknown = sorted((set(overrides) | set(objects or ())) - set(all_objects))
+    if unknown:
+        raise SolveError(f"no object '{unknown[0]}' in the scene to bake a lightmap for")
+    chosen = set(all_objects if objects is None else objects)
+    objects = {name: indices for name, indices in all_objects.items() if name in chosen}
+    patches = solution.patches
+    values = element_values(solution)
+    if len(values) != len(patches):
+        raise SolveError("the solution does not belong to this scene (patch counts differ)")
+    scene_size = max(scene.diameter, 1e-30)
+    pad = settings.gutter + 1  # a chart's grazed texels, then its gutter
+
+    layouts = {}
+    object_of_surface = np.full(len(scene), -1, dtype=np.int64)  # -1: not baked
+    surface_uv = scene.uv.copy()  # the given UVs, and the automatic ones made here
+    laid_out = np.zeros(len(scene), dtype=bool)  # surfaces given automatic UVs here
+    uv_maps = np.zeros((len(scene), 2, 4))  # their affine maps: uv = M @ [x, y, z, 1]
+    for number, (name, indices) in enumerate(objects.items()):
+        object_of_surface[indices] = number
+        override = overrides.get(name)
+        if _given_uvs(scene, name, indices):
+            side = settings.texel_density * math.sqrt(scene.area[indices].sum() / uv_polygon_area(scene.uv[indices]).sum())
+            layouts[name] = resolve_size((math.ceil(side),) * 2, override, settings.max_size, settings.power_of_two,
+                                         name)
+            continue
+        surfaces = {int(i): scene.surface(i) for i in indices}
+        object_charts = charts.make_charts(surfaces, list(surfaces), scene_size)
+        natural = charts.natural_size(object_charts, settings.texel_density, pad)
+        size = resolve_size(natural, override, settings.max_size, settings.power_of_two, name)
+        scale = charts.largest_fitting_scale(object_charts, size, pad, name)
+        layout = charts.place_charts(object_charts, size, scale, pad)
+        laid_out[indices] = True
+        uv_maps[indices] = [layout.uv_maps[int(i)] for i in indices]
+        surface_uv[indices] = np.einsum("sij,skj->ski", uv_maps[indices, :, :3], scene.corners[indices]) \
+            + uv_maps[indices, None, :, 3]
+        layouts[name] = size
+
+    # patch corner UVs: the given ones were subdivided with the patches; automatic ones are affine in position
+    patch_uv = np.array(patches.uv, dtype=np.float64)
+    auto = laid_out[patches.surface]
+    maps = uv_maps[patches.surface[auto]]
+    patch_uv[auto] = np.einsum("pij,pkj->pki", maps[..., :3], patches.corners[auto]) + maps[:, None, :, 3]
+
+    group = object_of_surface[patches.surface]
+    baked = np.flatnonzero(group >= 0)
+    lattice = np.zeros((len(patches),) + (values.shape[1] + 2,) * 2 + (3,))
+    lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
+                                        patches.normal[baked], world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
+    lightmaps = {}
+    with open_gpu(gpu) as lightmap_gpu:
+        for name, indices in objects.items():
+            size = layouts[name]
+            mine = np.flatnonzero(np.isin(patches.surface, indices))
+            corners_texels = patch_uv[mine] * np.asarray(size, dtype=np.float64)
+            texel_values, signed_ids = rasterize(lightmap_gpu, corners_texels, lattice[mine], size)
+            covered = signed_ids != 0
+            inside = signed_ids > 0
+            patch_index = np.where(inside, mine[np.maximum(signed_ids, 1) - 1], -1).astype(np.int32)
+            if not covered.any():
+                raise SolveError(f"object '{name}': its faces cover no texel of a {size[0]}x{size[1]}"
+                                 " lightmap; raise the texel density or its resolution")
+            levels, coverage = mip_levels(texel_values.astype(np.float64), covered, settings.gutter)
+            lightmaps[name] = Lightmap(object_name=name, levels=levels, coverage=coverage, patch_index=patch_index,
+                                       surfaces=indices, surface_uv=surface_uv[indices],
+                                       texel_density=math.sqrt(inside.sum() / scene.area[indices].sum()))
+    return lightmaps
+

@@ -1,0 +1,49 @@
+"""The GPU pass that lays patch lattices into a lightmap (lightmap_texel_radiosity.frag): texel
+centres inside a patch's UV footprint get its interpolated value; a texel footprints only
+graze takes the value of the nearest footprint at its nearest point."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..gpu import GPU, storage
+
+
+def rasterize(gpu: GPU, corners_texels: np.ndarray, lattice: np.ndarray, size: tuple[int, int]):
+    """GPU pass: (H, W, 3) float32 values and (H, W) int32 signed local patch ids (see the shader)."""
+    width, height = size
+    count, side = lattice.shape[:2]
+    low = np.floor(corners_texels.min(axis=1)) - 1  # one texel more: grazed texels count too
+    high = np.ceil(corners_texels.max(axis=1)) + 1
+    box = np.stack([low, np.stack([high[:, 0], low[:, 1]], 1), high,
+                    low, high, np.stack([low[:, 0], high[:, 1]], 1)], axis=1)  # (P, 6, 2)
+    vertices = np.empty(count * 6, dtype=[("texel", "f4", 2), ("patch", "i4")])
+    vertices["texel"] = box.reshape(-1, 2)
+    vertices["patch"] = np.repeat(np.arange(count, dtype=np.int32), 6)
+    lattice_rgba = np.zeros((count, side, side, 4), dtype=np.float32)
+    lattice_rgba[..., :3] = lattice
+
+    program = gpu.program("lightmap_patch_bounds.vert", "lightmap_texel_radiosity.frag")
+    program["size"].value = (float(width), float(height))
+    program["elements"].value = side - 2
+    ctx = gpu.ctx
+    with gpu.resources() as res:
+        corner_buffer = res.buffer(corners_texels.astype(np.float32).tobytes())
+        lattice_buffer = res.buffer(lattice_rgba.tobytes())
+        vbo = res.buffer(vertices.tobytes())
+        vao = res.vertex_array(program, [(vbo, "2f 1i", "in_texel", "in_patch")])
+        radiance = res.texture((width, height), 4, dtype="f4")
+        patch_ids = res.texture((width, height), 1, dtype="i4")
+        depth = res.depth_renderbuffer((width, height))
+        fbo = res.framebuffer([radiance, patch_ids], depth)
+        fbo.use()
+        fbo.viewport = (0, 0, width, height)
+        fbo.clear(depth=1.0)
+        ctx.enable_only(ctx.DEPTH_TEST)  # no culling: mirrored UV charts wind clockwise
+        ctx.depth_func = "<"
+        corner_buffer.bind_to_storage_buffer(storage("LATTICE_CORNERS"))
+        lattice_buffer.bind_to_storage_buffer(storage("LATTICE_VALUES"))
+        vao.render()
+        values = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=0), dtype=np.float32)
+        ids = np.frombuffer(fbo.read(components=1, dtype="i4", attachment=1), dtype=np.int32)
+    return values.reshape(height, width, 4)[..., :3], ids.reshape(height, width)

@@ -1,0 +1,163 @@
+"""Progressive refinement radiosity on the GPU (dissertation §4.2; Coombe et al. 2004).
+
+Per shot: select the patch of largest unshot power (residual mip, GPU reduction), render its
+hemispherical visibility map, add ΔB to every receiving element, clear its residual, rebuild
+the residual's mip levels. Stops when the unshot power falls under tolerance × emitted power,
+or at the shot budget.
+
+Energy is booked in float64 on the CPU from the few numbers read back per shot (see
+`selection.READBACK`): each shot's power comes from the shooter's mean residual, and the GPU
+sums (fixed point, exact to ~1e-9 per work group) say which fraction of it hit a receiver and
+which fraction was reflected.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..errors import SolveCancelled
+from ..gpu import GPU
+from ..scene import Patches, Scene, SceneEffects
+from ..settings import SolveSettings
+from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchShooters, ShootingPass,
+                        shoot_direct_light)
+from ..timing import StageTimer
+from ..visibility import VARIANTS, VisibilityMap
+from .ledger import EnergyLedger, ambient_term, time_left
+from .selection import READBACK, Selector
+
+
+@dataclass
+class ProgressiveWork:
+    """What progressive refinement ran (the report's `effects`, with the scene analysis)."""
+    visibility_maps: int
+    shots: int
+    channels_solved: int
+    texel_bytes: int
+    residual_updates: bool
+    direct: DirectLightWork
+
+    def entries(self) -> dict:
+        return {k: v for k, v in asdict(self).items() if k != "direct"} | asdict(self.direct)
+
+
+@dataclass
+class ProgressiveDetails:
+    """Progressive refinement's part of the report."""
+    shots: int
+    stop_reason: str  # "tolerance" or "max_shots"
+    unshot_fraction: float
+    energy: dict  # the ledger (EnergyLedger.as_dict) and the GPU's own unshot sum
+    visibility: dict  # variant, resolution, tessellation, search radius, occluder margin, shooting point
+    kernel: str
+    elements_per_patch: int
+    shots_per_second: float | None
+    work: ProgressiveWork
+    readback_per_shot: str = READBACK
+
+    @property
+    def iterations(self) -> None:
+        return None
+
+    def entries(self) -> dict:
+        return {"shots": self.shots, "stop_reason": self.stop_reason, "unshot_fraction": self.unshot_fraction,
+                "energy": self.energy, "readback_per_shot": self.readback_per_shot, "visibility": self.visibility,
+                "kernel": self.kernel, "elements_per_patch": self.elements_per_patch,
+                "shots_per_second": self.shots_per_second}
+
+
+def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
+                      timer: StageTimer, progress=None, should_cancel=None):
+    """(patch radiosity (P, 3), element radiosity (P, S, S, 3), ProgressiveDetails).
+    `effects` (the scene analysis) may switch off visibility maps (nothing occludes) and
+    residual updates (no interreflection: only emitters and lamps ever shoot)."""
+    started = time.perf_counter()
+    variant = VARIANTS[settings.visibility]
+    tolerance = settings.effective_tolerance
+    max_shots = settings.max_shots if settings.max_shots is not None else 1_000_000
+
+    emitted = (patches.area[:, None] * patches.emission).sum(axis=0)
+    ledger = EnergyLedger(emitted)
+    ambient = ambient_term(patches)
+    shooters = PatchShooters(patches)
+    with gpu.resources() as res:
+        with timer.stage("setup"):
+            textures = ElementTextures(res, patches, settings.elements, channels=effects.channels)
+            buffers = PatchBuffers(res, patches, textures)
+            selector = Selector(res, textures, buffers)
+            visibility_map = VisibilityMap(res, patches, settings.visibility_res, settings.visibility, scene.diameter)
+            shooting = ShootingPass(res, textures, buffers, settings.kernel, variant.search_radius,
+                                    occluder_margin=variant.occluder_margin, occlusion=effects.occlusion,
+                                    interreflection=effects.interreflection)
+        with timer.stage("direct_light"):
+            direct = shoot_direct_light(res, scene, patches, settings.elements, shooting, visibility_map,
+                                        effects.occlusion)
+            textures.build_mipmaps()
+            first = selector.select()  # also drops the lamp shots' energy sums: they are booked here
+        # lamps and the sky enter the ledger as the power their first bounce adds to the unshot
+        lamp_first_bounce = np.maximum(first.unshot - emitted, 0.0)
+        ledger.emitted = ledger.emitted + lamp_first_bounce
+        emitted_total = float(ledger.emitted.sum())
+
+        shots = 0
+        history = []  # (elapsed, unshot fraction) for the estimate of time left
+        unshot_gpu = emitted.copy()
+        stop_reason = "tolerance"
+        while True:
+            if should_cancel is not None and should_cancel():
+                raise SolveCancelled("cancelled")
+            with timer.stage("select"):
+                selection = selector.select()
+            ledger.settle(selection.last_shot)
+            unshot_gpu = selection.unshot
+            fraction_left = float(unshot_gpu.sum()) / emitted_total if emitted_total > 0 else 0.0
+            elapsed = time.perf_counter() - started
+            history.append((elapsed, fraction_left))
+            if progress is not None:
+                eta = time_left(history, tolerance)
+                progress(min(1.0, max(0.0, 1.0 - fraction_left)),
+                         f"shot {shots}, unshot {fraction_left:.2e} of emitted"
+                         + (f", ~{eta:.0f} s left" if eta is not None else ""),
+                         {"shots": shots, "elapsed": elapsed, "eta": eta, "unshot_fraction": fraction_left,
+                          "ambient": ambient(unshot_gpu).tolist()})
+            if fraction_left <= tolerance or selection.patch < 0 or emitted_total <= 0:
+                break
+            if shots >= max_shots:
+                stop_reason = "max_shots"
+                break
+            shooter = shooters.shooter(selection.patch, selection.residual,
+                                       selection.centroid if settings.shoot_from == "centroid" else None)
+            ledger.pending = shooter.power
+            if effects.occlusion:
+                with timer.stage("visibility"):
+                    visibility_map.render(shooter.position, shooter.axes, skip_patch=shooter.patch)
+            with timer.stage("shoot"):
+                shooting.shoot(shooter, visibility_map)
+            with timer.stage("mipmap"):
+                textures.build_mipmaps()
+            shots += 1
+
+        with timer.stage("readback"):
+            elements = textures.read_radiosity()
+        areas = textures.areas
+
+    patch_radiosity = (areas[..., None] * elements).sum(axis=(1, 2)) / areas.sum(axis=(1, 2))[:, None]
+    solve_seconds = time.perf_counter() - started
+    details = ProgressiveDetails(
+        shots=shots, stop_reason=stop_reason,
+        unshot_fraction=float(unshot_gpu.sum()) / emitted_total if emitted_total > 0 else 0.0,
+        energy={**ledger.as_dict(), "unshot_gpu_sum": float(unshot_gpu.sum())},
+        visibility={"variant": settings.visibility, "resolution": settings.visibility_res,
+                    "tessellation": variant.tessellation, "search_radius": variant.search_radius,
+                    "occluder_margin": variant.occluder_margin, "from": settings.shoot_from},
+        kernel=settings.kernel, elements_per_patch=settings.elements,
+        shots_per_second=shots / solve_seconds if solve_seconds > 0 else None,
+        work=ProgressiveWork(visibility_maps=(shots if effects.occlusion else 0) + direct.lamp_visibility_maps,
+                             shots=shots, channels_solved=effects.channels,
+                             texel_bytes=16 if effects.channels == 3 else 4,
+                             residual_updates=bool(effects.interreflection), direct=direct),
+    )
+    return patch_radiosity, elements, details

@@ -1,0 +1,141 @@
+"""Scene analysis: which effects a scene calls for, decided cheaply and conservatively before
+any GPU work, so a solve simulates only those (the report's `effects`).
+
+- channels: 1 when every reflectance and emission (and lamp and world colour) is grey, else 3;
+- occlusion: False when no surface can hide any part of another — every surface lies in
+  the closed front half-space of every other one (the inside of a convex room, two
+  facing panels), so segments between surfaces stay inside a convex region bounded by
+  their planes and cannot cross a third surface;
+- interreflection: False when no two reflective surfaces can see each other (a surface
+  must have a vertex strictly in front of the other's plane, both ways): light then
+  bounces at most once, B = E + ρ F E;
+- rows: patches with zero reflectance receive nothing they could reflect, so neither a
+  hemi-cube nor a linear-solve row is spent on them.
+
+The pairwise plane tests stop at the first pair that decides them (a furnished room: within
+the first chunk) and answer "present" (simulate it) once they would cost more than
+PAIR_BUDGET vertex-plane tests, so they never grow quadratically with the scene.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import SceneError
+from .model import Scene
+
+PLANE_TOLERANCE = 1e-6  # relative to the scene diameter
+ROWS_PER_CHUNK = 256
+PAIR_BUDGET = 50_000_000  # vertex-plane tests before the analysis gives up and simulates
+
+
+@dataclass(frozen=True)
+class SceneEffects:
+    emitters: int
+    channels: int
+    occlusion: bool
+    interreflection: bool
+
+    @classmethod
+    def everything(cls, emitters: int) -> "SceneEffects":
+        """The full simulation (what a solve does with skips disabled)."""
+        return cls(emitters=emitters, channels=3, occlusion=True, interreflection=True)
+
+
+def _plane_heights(scene: Scene, planes: slice, points: np.ndarray) -> np.ndarray:
+    """heights[i, ...] = signed distance of `points` (..., 3) above the plane of surface i in `planes`."""
+    anchors, normals = scene.corners[planes, 0], scene.normal[planes]
+    flat = points.reshape(-1, 3)
+    heights = flat @ normals.T - np.einsum("id,id->i", anchors, normals)[None, :]
+    return heights.T.reshape((len(normals),) + points.shape[:-1])
+
+
+def _chunks(count: int):
+    for start in range(0, count, ROWS_PER_CHUNK):
+        yield slice(start, min(start + ROWS_PER_CHUNK, count))
+
+
+def is_grey(scene: Scene) -> bool:
+    colours = [scene.reflectance, scene.emission, np.zeros((0, 3))]
+    colours += [lamp.color[None] for lamp in scene.lamps] + [scene.world_color[None]]
+    values = np.concatenate(colours)
+    return bool(np.all(np.abs(values - values[:, :1]) <= 1e-12 * np.maximum(1.0, np.abs(values))))
+
+
+def _inside_every_front(scene: Scene, points: np.ndarray) -> bool:
+    """Do `points` (N, 3) lie in the closed front half-space of every surface?"""
+    if len(points) == 0:
+        return True
+    tolerance = PLANE_TOLERANCE * scene.diameter
+    return all(np.all(_plane_heights(scene, rows, points) >= -tolerance) for rows in _chunks(len(scene)))
+
+
+def can_occlude(scene: Scene) -> bool:
+    """Surfaces lying in front of every other surface's plane bound a convex region; lamps inside
+    it (point, spot, area corners) reach everything unblocked. A sun comes from outside: walls
+    of such a room do block it, so a sun always counts as possible occlusion."""
+    tolerance = PLANE_TOLERANCE * scene.diameter
+    if len(scene) ** 2 * 4 > PAIR_BUDGET:
+        return True  # too big to prove convex within the budget: simulate occlusion
+    if any(np.any(_plane_heights(scene, rows, scene.corners) < -tolerance) for rows in _chunks(len(scene))):
+        return True
+    lamps = scene.lamps
+    if any(lamp.type == "sun" for lamp in lamps):
+        return True
+    points = [lamp.position[None] for lamp in lamps if lamp.position is not None]
+    points += [lamp.vertices for lamp in lamps if lamp.vertices is not None]
+    return not _inside_every_front(scene, np.concatenate(points) if points else np.zeros((0, 3)))
+
+
+def can_interreflect(scene: Scene) -> bool:
+    """Two reflective surfaces, each with a vertex strictly in front of the other's plane."""
+    reflective = np.flatnonzero(np.any(scene.reflectance > 0, axis=1))
+    if len(reflective) < 2:
+        return False
+    tolerance = PLANE_TOLERANCE * scene.diameter
+    corners = scene.corners[reflective]
+    budget = PAIR_BUDGET
+    for rows in _chunks(len(reflective)):
+        if budget <= 0:
+            return True  # undecided within the budget: simulate interreflection
+        chosen = reflective[rows]
+        # j rises in front of i, and i in front of j (vertices of i above j's plane)
+        sees = np.any(_plane_heights(scene, chosen, corners) > tolerance, axis=2)  # (rows, R)
+        seen = np.any(_plane_heights(scene, reflective, corners[rows]) > tolerance, axis=2).T  # (rows, R)
+        mutual = sees & seen
+        mutual[np.arange(len(chosen)), np.arange(rows.start, rows.stop)] = False
+        if mutual.any():
+            return True
+        budget -= 2 * len(chosen) * len(reflective) * 4
+    return False
+
+
+def emitter_count(scene: Scene) -> int:
+    """Emissive surfaces, lamps, and the world when it has a colour."""
+    surfaces = int(np.any(scene.emission > 0, axis=1).sum())
+    return surfaces + len(scene.lamps) + int(bool(np.any(scene.world_color > 0)))
+
+
+def check_has_emitter(scene: Scene) -> None:
+    """Refuse a scene with no emissive surface, no lamp that emits and no world colour."""
+    if emitter_count(scene) == 0:
+        raise SceneError(
+            "scene: nothing emits light; give at least one surface a positive emission"
+            " (an emissive material), a lamp or a world colour before baking"
+        )
+
+
+def analyse(scene: Scene) -> SceneEffects:
+    return SceneEffects(
+        emitters=emitter_count(scene),
+        channels=1 if is_grey(scene) else 3,
+        occlusion=can_occlude(scene),
+        interreflection=can_interreflect(scene),
+    )
+
+
+def effects_for(scene: Scene, skip_unneeded: bool) -> SceneEffects:
+    """What to simulate: the analysis, or everything when skips are disabled."""
+    return analyse(scene) if skip_unneeded else SceneEffects.everything(emitter_count(scene))

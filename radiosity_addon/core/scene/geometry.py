@@ -1,0 +1,69 @@
+"""Geometry of planar polygons and bilinear patches, vectorized over leading axes.
+
+A polygon is stored as four corners c0..c3, counter-clockwise seen from its front; a triangle
+repeats its last corner (c3 == c2). A point of it is the bilinear map
+
+    p(s, t) = c0 (1-s)(1-t) + c1 s (1-t) + c2 s t + c3 (1-s) t,   s, t in [0, 1],
+
+which for a triangle is the collapsed quad whose t = 1 edge is the apex. Patches, elements and
+lightmap texels all find their place through it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def area_vector(corners: np.ndarray) -> np.ndarray:
+    """(..., 3) half the cross product of the diagonals: |v| is the area of a planar quad or
+    triangle (c3 == c2), v/|v| its front normal. corners (..., 4, 3)."""
+    c = np.asarray(corners, dtype=np.float64)
+    return 0.5 * np.cross(c[..., 2, :] - c[..., 0, :], c[..., 3, :] - c[..., 1, :])
+
+
+def polygon_area_vector(vertices: np.ndarray) -> np.ndarray:
+    """Area vector of one polygon of k vertices (k, 3), by a fan of cross products."""
+    v = np.asarray(vertices, dtype=np.float64)
+    return 0.5 * np.cross(v[1:-1] - v[0], v[2:] - v[0]).sum(axis=0)
+
+
+def unit(vectors: np.ndarray) -> np.ndarray:
+    vectors = np.asarray(vectors, dtype=np.float64)
+    return vectors / np.linalg.norm(vectors, axis=-1, keepdims=True)
+
+
+def bilinear(corners: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """corners (P, 4, D); s, t arrays of one shape -> (P, *shape, D)."""
+    s = np.asarray(s, dtype=np.float64)[None, ..., None]
+    t = np.asarray(t, dtype=np.float64)[None, ..., None]
+    expand = (slice(None),) + (None,) * (s.ndim - 2)
+    c0, c1, c2, c3 = (corners[expand + (k,)] for k in range(4))
+    return c0 * (1 - s) * (1 - t) + c1 * s * (1 - t) + c2 * s * t + c3 * (1 - s) * t
+
+
+def tangent_frame(normal: np.ndarray, hint: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Unit x, y completing a right-handed frame (x, y, normal); x along `hint` when given."""
+    normal = np.asarray(normal, dtype=np.float64)
+    if hint is None or np.linalg.norm(np.cross(hint, normal)) < 1e-6:
+        hint = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = hint - np.dot(hint, normal) * normal
+    x /= np.linalg.norm(x)
+    return x, np.cross(normal, x)
+
+
+def tangent_frames(points: np.ndarray, normals: np.ndarray, edges: np.ndarray):
+    """Frames (origin, tangent, bitangent, normal) at many points, each tangent along `edges`."""
+    tangent = edges - (edges * normals).sum(axis=1, keepdims=True) * normals
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    return points, tangent, np.cross(normals, tangent), normals
+
+
+def area_centroid(corners: np.ndarray) -> np.ndarray:
+    """(P, 3) area centroids of quads (P, 4, 3): the triangles c0c1c2 and c0c2c3 weighted by area."""
+    c = corners
+    first = np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
+    second = np.linalg.norm(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 0]), axis=1)
+    centroid_first = (c[:, 0] + c[:, 1] + c[:, 2]) / 3
+    centroid_second = (c[:, 0] + c[:, 2] + c[:, 3]) / 3
+    total = (first + second)[:, None]
+    return (first[:, None] * centroid_first + second[:, None] * centroid_second) / total

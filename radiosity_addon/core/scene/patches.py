@@ -1,0 +1,135 @@
+"""Surfaces split into patches (vectorized numpy), every patch stored as a quad of four corners
+(a triangle's sub-triangles repeat their last corner), the bilinear map of `geometry`.
+
+Two ways to split (`SolveSettings`):
+- uniform: every surface N x N (quads on a bilinear grid, triangles into N² triangles);
+- by size: each surface into pieces about `patch_size` across — a quad into ceil(side /
+  size) along each of its two directions, a triangle into n² with n = ceil(longest edge /
+  size), at most MAX_SPLIT along a side — so big faces get many patches and small ones stay
+  whole (the Blender panel's default).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..settings import MAX_SPLIT
+from .geometry import area_centroid, area_vector, bilinear
+from .model import Scene
+
+
+@dataclass
+class Patches:
+    corners: np.ndarray  # (P, 4, 3) float64
+    uv: np.ndarray  # (P, 4, 2) lightmap UVs of the corners (zeros where the scene has none)
+    surface: np.ndarray  # (P,) int index into the scene's surfaces
+    reflectance: np.ndarray  # (P, 3)
+    emission: np.ndarray  # (P, 3)
+    is_triangle: np.ndarray  # (P,) bool: c3 repeats c2
+    grid: np.ndarray  # (P, 2) int (row along t, column along s) of the patch in its surface's split
+    split: np.ndarray  # (S, 2) int per surface: (columns along s, rows along t); triangles (n, n)
+
+    def __len__(self) -> int:
+        return len(self.corners)
+
+    @property
+    def area_vector(self) -> np.ndarray:
+        return area_vector(self.corners)
+
+    @property
+    def area(self) -> np.ndarray:
+        return np.linalg.norm(self.area_vector, axis=1)
+
+    @property
+    def normal(self) -> np.ndarray:
+        a = self.area_vector
+        return a / np.linalg.norm(a, axis=1, keepdims=True)
+
+    @property
+    def center(self) -> np.ndarray:
+        return area_centroid(self.corners)
+
+    def points(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """Bilinear points of every patch at parameters s, t (broadcast): (P, *s.shape, 3)."""
+        return bilinear(self.corners, s, t)
+
+
+def quad_grid(columns: int, rows: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Corner parameters (k, 4, 2) of a columns x rows split of the unit square, and (row, col)."""
+    row, col = np.meshgrid(np.arange(rows), np.arange(columns), indexing="ij")
+    row, col = row.ravel(), col.ravel()
+    offsets = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=np.float64)  # (s, t)
+    params = (np.stack([col, row], axis=1)[:, None, :] + offsets[None]) / np.array([columns, rows])
+    return params, row, col
+
+
+def triangle_grid(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Barycentric (b1, b2) corners (n*n, 4, 2) of the n^2 sub-triangles of a triangle.
+
+    Row r (from the v0-v1 edge towards v2) holds 2(n-r)-1 triangles: upright
+    ones (i, r), (i+1, r), (i, r+1) and inverted ones (i+1, r), (i+1, r+1),
+    (i, r+1), all counter-clockwise like the parent.
+    """
+    corners, rows, cols = [], [], []
+    for r in range(n):
+        for i in range(n - r):
+            corners.append([(i, r), (i + 1, r), (i, r + 1), (i, r + 1)])
+            rows.append(r)
+            cols.append(2 * i)
+            if i < n - r - 1:
+                corners.append([(i + 1, r), (i + 1, r + 1), (i, r + 1), (i, r + 1)])
+                rows.append(r)
+                cols.append(2 * i + 1)
+    return np.asarray(corners, dtype=np.float64) / n, np.asarray(rows), np.asarray(cols)
+
+
+def split_counts(scene: Scene, subdiv: int | None, patch_size: float) -> np.ndarray:
+    """(S, 2) columns along s and rows along t for every surface."""
+    if subdiv is not None:
+        if subdiv < 1:
+            raise ValueError("subdivision must be at least 1")
+        return np.full((len(scene), 2), subdiv, dtype=np.int64)
+    c = scene.corners
+    edges = np.linalg.norm(np.roll(c, -1, axis=1) - c, axis=2)  # (S, 4): c0c1, c1c2, c2c3, c3c0
+    pieces = lambda length: np.clip(np.ceil(length / patch_size), 1, MAX_SPLIT).astype(np.int64)  # noqa: E731
+    along_s = pieces(np.maximum(edges[:, 0], edges[:, 2]))
+    along_t = pieces(np.maximum(edges[:, 1], edges[:, 3]))
+    triangle = pieces(edges.max(axis=1))
+    return np.where(scene.is_triangle[:, None], triangle[:, None], np.stack([along_s, along_t], axis=1))
+
+
+def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5) -> Patches:
+    """Split every surface N x N (`subdiv`), or by `patch_size` when subdiv is None."""
+    split = split_counts(scene, subdiv, patch_size)
+    keys = np.concatenate([scene.is_triangle[:, None].astype(np.int64), split], axis=1)
+    groups, group_of = np.unique(keys, axis=0, return_inverse=True)
+    parts = []
+    for number, (triangle, columns, rows) in enumerate(groups):
+        members = np.flatnonzero(group_of.ravel() == number)
+        if triangle:
+            params, row, col = triangle_grid(int(columns))
+            weights = np.concatenate([1 - params.sum(axis=2, keepdims=True), params], axis=2)  # (k, 4, 3)
+            corners = np.einsum("kcw,gwd->gkcd", weights, scene.corners[members, :3])
+            uv = np.einsum("kcw,gwd->gkcd", weights, scene.uv[members, :3])
+        else:
+            params, row, col = quad_grid(int(columns), int(rows))
+            corners = bilinear(scene.corners[members], params[..., 0], params[..., 1])
+            uv = bilinear(scene.uv[members], params[..., 0], params[..., 1])
+        count = len(params)
+        parts.append((np.repeat(members, count), corners.reshape(-1, 4, 3), uv.reshape(-1, 4, 2),
+                      np.tile(np.stack([row, col], axis=1), (len(members), 1))))
+    surface = np.concatenate([p[0] for p in parts])
+    order = np.argsort(surface, kind="stable")  # surface by surface, each in its grid order
+    surface = surface[order]
+    return Patches(
+        corners=np.concatenate([p[1] for p in parts])[order],
+        uv=np.concatenate([p[2] for p in parts])[order],
+        surface=surface.astype(np.int32),
+        reflectance=scene.reflectance[surface],
+        emission=scene.emission[surface],
+        is_triangle=scene.is_triangle[surface],
+        grid=np.concatenate([p[3] for p in parts])[order].astype(np.int32),
+        split=split,
+    )

@@ -1,0 +1,85 @@
+"""The settings of a solve and of a lightmap bake, with the one set of defaults that the
+command line, the Blender panel and the core share."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+from .errors import SolveError
+
+METHODS = ("progressive", "hemicube")  # progressive refinement, or the hemi-cube method (the original)
+SOLVERS = ("jacobi-gpu", "jacobi-cpu", "gauss-seidel")  # linear solvers of the hemi-cube method
+VISIBILITY_VARIANTS = ("plain", "tessellated", "search", "guarded")  # visibility.hemisphere.VARIANTS
+KERNELS = ("exact", "disk")
+SHOOTING_POINTS = ("centroid", "centre")
+DEFAULT_TOLERANCE = {"progressive": 1e-3, "hemicube": 1e-5}
+
+PATCH_SIZE = 0.5  # scene units (metres): faces longer than this are split into patches
+MAX_SPLIT = 64  # patches along one side of a surface in the Patch Size mode
+TEXEL_DENSITY = 64.0  # lightmap texels per scene unit (metre): 15.6 mm texels
+MAX_LIGHTMAP_SIZE = 1024  # texels, the largest side of a lightmap
+LIGHTMAP_GUTTER = 2  # texels dilated around every chart, at every mip level
+MIN_LIGHTMAP_SIZE = 8
+
+
+@dataclass
+class SolveSettings:
+    method: str = "progressive"
+    subdiv: int | None = None  # N: every surface split N x N into patches; None: split by patch_size
+    patch_size: float = PATCH_SIZE  # with subdiv None: longest patch side in scene units
+    elements: int = 4  # S x S elements per patch (progressive), S a power of two
+    hemicube_res: int = 128  # pixels across the hemi-cube's top face
+    solver: str = "jacobi-gpu"
+    tolerance: float | None = None  # None: the method's default
+    max_iterations: int = 100_000  # linear solvers
+    max_shots: int | None = None  # progressive; None: as many as the tolerance needs
+    visibility: str = "search"  # progressive: plain | tessellated | search | guarded
+    kernel: str = "exact"  # progressive: exact | disk
+    visibility_res: int = 512  # progressive: pixels across the hemispherical visibility map
+    shoot_from: str = "centroid"  # progressive: visibility map from the unshot power's centroid | centre
+    memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
+    skip_unneeded: bool = True  # simulate only the effects the scene calls for (scene.analysis)
+
+    @property
+    def effective_tolerance(self) -> float:
+        return self.tolerance if self.tolerance is not None else DEFAULT_TOLERANCE[self.method]
+
+    def validate(self) -> None:
+        """Refuse settings no solve can use, with a message naming the setting."""
+        choices = {"method": METHODS, "solver": SOLVERS, "visibility": VISIBILITY_VARIANTS,
+                   "kernel": KERNELS, "shoot_from": SHOOTING_POINTS}
+        for name, allowed in choices.items():
+            value = getattr(self, name)
+            if value not in allowed:
+                raise SolveError(f"unknown {name.replace('_', ' ')} '{value}' (choose {', '.join(allowed)})")
+        if self.subdiv is not None and self.subdiv < 1:
+            raise SolveError("subdivision must be at least 1")
+        if self.subdiv is None and not (math.isfinite(self.patch_size) and self.patch_size > 0):
+            raise SolveError(f"patch size must be positive, got {self.patch_size}")
+        if self.elements < 1 or self.elements & (self.elements - 1):
+            raise SolveError("elements per patch must be a power of two (1, 2, 4, 8, ...)")
+        if self.hemicube_res < 8 or self.hemicube_res % 2:
+            raise SolveError("hemi-cube resolution must be an even number of at least 8")
+        if not 16 <= self.visibility_res <= 8192:
+            raise SolveError("visibility map resolution must lie between 16 and 8192 pixels")
+        if not 0 < self.effective_tolerance < 1:
+            raise SolveError("tolerance must lie between 0 and 1")
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class LightmapSettings:
+    texel_density: float = TEXEL_DENSITY  # texels per scene unit
+    max_size: int = MAX_LIGHTMAP_SIZE  # cap on width and height
+    resolution_overrides: dict = field(default_factory=dict)  # object name -> side (or (w, h)); 0 = density
+    power_of_two: bool = False  # round sizes up to powers of two
+    gutter: int = LIGHTMAP_GUTTER
+
+    def validate(self) -> None:
+        if not (math.isfinite(self.texel_density) and self.texel_density > 0):
+            raise SolveError(f"texel density must be positive, got {self.texel_density}")
+        if self.max_size < MIN_LIGHTMAP_SIZE:
+            raise SolveError(f"the lightmap size cap must be at least {MIN_LIGHTMAP_SIZE}, got {self.max_size}")

@@ -1,0 +1,48 @@
+"""Lamps as shooters: a point lamp two hemispheres from its position, a spot of cone <= 180°
+one, a sun one orthographic view from outside the scene, an area lamp its polygon in pieces."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..scene import Lamp
+from ..scene.geometry import bilinear, polygon_area_vector, tangent_frame
+from .shooters import DIRECTIONAL, POINT_LAMP, POLYGON, Shooter
+
+AREA_LAMP_PIECE = 1 / 32  # longest side of an area lamp's pieces, as a fraction of the scene's size
+AREA_LAMP_MAX_SPLIT = 8  # pieces per side at most
+
+
+def lamp_shooters(lamp: Lamp, scene_centre: np.ndarray, scene_diameter: float) -> list[Shooter]:
+    """The shots of one lamp (see the module doc)."""
+    if lamp.type in ("point", "spot"):
+        cone = lamp.type == "spot"
+        cos_half = math.cos(lamp.spot_size / 2) if cone else -2.0
+        axis = lamp.direction if cone else np.array([0.0, 0.0, 1.0])
+        poles = [axis] if cone and lamp.spot_size <= math.pi else [axis, -axis]
+        return [Shooter(position=lamp.position, axes=(*tangent_frame(pole), pole), polygon=np.zeros((4, 3)),
+                        area=0.0, radiosity=lamp.intensity, kind=POINT_LAMP, light_direction=tuple(axis),
+                        spot_cos_half=cos_half, spot_smooth=(1 - cos_half) * lamp.spot_blend if cone else 0.0)
+                for pole in poles]
+    if lamp.type == "sun":
+        eye = scene_centre - lamp.direction * scene_diameter
+        return [Shooter(position=eye, axes=(*tangent_frame(lamp.direction), lamp.direction),
+                        polygon=np.zeros((4, 3)), area=0.0, radiosity=lamp.color * lamp.strength, kind=DIRECTIONAL,
+                        light_direction=tuple(lamp.direction), ortho_extent=scene_diameter / 2)]
+    # An area lamp is split into sub-lamps, each with its own visibility map, so shadows keep
+    # their penumbra (one map from the centre turns a nearby object's penumbra into umbra).
+    normal = polygon_area_vector(lamp.vertices)
+    normal = normal / np.linalg.norm(normal)
+    sides = np.linalg.norm(np.roll(lamp.vertices, -1, axis=0) - lamp.vertices, axis=1)
+    split = int(np.clip(np.ceil(sides.max() / (scene_diameter * AREA_LAMP_PIECE)), 1, AREA_LAMP_MAX_SPLIT))
+    grid = np.arange(split + 1) / split
+    s0, t0 = np.meshgrid(grid[:-1], grid[:-1])
+    offsets = np.array([[0, 0], [1, 0], [1, 1], [0, 1]]) / split
+    corners = bilinear(lamp.vertices[None], s0.ravel()[:, None] + offsets[:, 0], t0.ravel()[:, None] + offsets[:, 1])[0]
+    radiance = lamp.area_radiance
+    x_axis = tangent_frame(normal, lamp.vertices[1] - lamp.vertices[0])
+    return [Shooter(position=piece.mean(axis=0), axes=(*x_axis, normal), polygon=piece,
+                    area=float(np.linalg.norm(polygon_area_vector(piece))), radiosity=radiance, kind=POLYGON)
+            for piece in corners]

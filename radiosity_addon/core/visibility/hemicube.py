@@ -1,0 +1,174 @@
+"""Hemi-cube item buffers on the GPU (dissertation §4.1.1): what a point sees, as the
+cosine-weighted fraction of its hemisphere covered by each patch.
+
+The scene is drawn into the five faces of a hemi-cube at each point as an item buffer of
+patch ids (depth test on). The pixels showing patch j, weighted by their delta form factors,
+sum to the fraction patch j covers: F_ij for a hemi-cube at patch i's centre (the hemi-cube
+method), the sky fraction 1 - sum_j for one at an element (the world colour). Work is
+batched: many hemi-cubes share one atlas framebuffer and are drawn by one instanced draw
+call; a compute shader reduces the atlas into rows on the GPU; one readback per batch.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..gpu import FORM_FACTOR_ONE, Resources, storage, texture_unit, work_groups
+from ..scene import Patches
+from ..scene.geometry import tangent_frames
+
+ATLAS_LIMIT = 4096  # atlas side in pixels (llvmpipe allows 16384; 4096 keeps memory modest)
+NO_PATCH = 0
+
+
+def delta_form_factors(resolution: int, normalize: bool = True) -> np.ndarray:
+    """Delta form factors of one hemi-cube tile: (3R, R) image, rows [0, R) top face,
+    then the four half side faces of R/2 rows each (z = height above the base).
+
+    Squared forms (docs/architecture.md): top ΔA / (π (x²+y²+1)²), side z ΔA / (π (x²+z²+1)²).
+    Normalized, the whole hemi-cube sums to exactly 1.
+    """
+    r = resolution
+    x = -1 + (np.arange(r) + 0.5) * 2 / r
+    pixel_area = (2 / r) ** 2
+    top = pixel_area / (np.pi * (x[None, :] ** 2 + x[:, None] ** 2 + 1) ** 2)
+    z = (np.arange(r // 2) + 0.5) * 2 / r
+    side = z[:, None] * pixel_area / (np.pi * (x[None, :] ** 2 + z[:, None] ** 2 + 1) ** 2)
+    tile = np.concatenate([top] + [side] * 4, axis=0)
+    return tile / tile.sum() if normalize else tile
+
+
+def fixed_point_weights(tile: np.ndarray) -> np.ndarray:
+    """Round to integers that sum to exactly 2^31, so a full hemi-cube row sums to 1."""
+    weights = np.floor(tile.ravel() * FORM_FACTOR_ONE).astype(np.int64)
+    shortfall = FORM_FACTOR_ONE - int(weights.sum())
+    # give the rounding remainder to the largest fractional parts
+    fractions = tile.ravel() * FORM_FACTOR_ONE - weights
+    weights[np.argsort(fractions)[::-1][:shortfall]] += 1
+    return weights.astype(np.uint32)
+
+
+def patch_frames(patches: Patches):
+    """Centre, tangent, bitangent, normal of every patch (orthonormal frames)."""
+    return tangent_frames(patches.center, patches.normal, patches.corners[:, 1] - patches.corners[:, 0])
+
+
+def face_instances(hemicube_frames, resolution: int, tiles_per_row: int, atlas_size: tuple[int, int]) -> np.ndarray:
+    """Per-instance rows (eye, right, up, forward, tile rect, up_min) for the 5 faces of the
+    hemi-cubes at `hemicube_frames`, laid out like `delta_form_factors` inside each tile."""
+    centre, t, b, n = hemicube_frames
+    count = len(centre)
+    # (forward, right, up, row offset in tile, rows, up_min) for top, +t, -t, +b, -b
+    faces = [
+        (n, t, b, 0, resolution, -1.0),
+        (t, b, n, resolution, resolution // 2, 0.0),
+        (-t, -b, n, resolution + resolution // 2, resolution // 2, 0.0),
+        (b, -t, n, 2 * resolution, resolution // 2, 0.0),
+        (-b, t, n, 2 * resolution + resolution // 2, resolution // 2, 0.0),
+    ]
+    slot = np.arange(count)
+    tile_x = (slot % tiles_per_row) * resolution
+    tile_y = (slot // tiles_per_row) * 3 * resolution
+    width, height = atlas_size
+    rows = []
+    for forward, right, up, row_offset, row_count, up_min in faces:
+        x0 = tile_x / width * 2 - 1
+        x1 = (tile_x + resolution) / width * 2 - 1
+        y0 = (tile_y + row_offset) / height * 2 - 1
+        y1 = (tile_y + row_offset + row_count) / height * 2 - 1
+        rect = np.stack([x0, y0, x1, y1], axis=1)
+        rows.append(np.concatenate([centre, right, up, forward, rect, np.full((count, 1), up_min)], axis=1))
+    # instance order: slot-major, 5 faces each
+    return np.stack(rows, axis=1).reshape(count * 5, -1).astype(np.float32)
+
+
+def scene_geometry(patches: Patches) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex rows (position, normal, patch id) and triangle indices of all patches."""
+    count = len(patches)
+    normal = np.repeat(patches.normal, 4, axis=0).astype(np.float32)
+    position = patches.corners.reshape(-1, 3).astype(np.float32)
+    ids = np.repeat(np.arange(count, dtype=np.uint32), 4)
+    vertices = np.empty(count * 4, dtype=[("p", "f4", 3), ("n", "f4", 3), ("id", "u4")])
+    vertices["p"], vertices["n"], vertices["id"] = position, normal, ids
+    base = (np.arange(count) * 4)[:, None]
+    quads = base + np.array([0, 1, 2, 0, 2, 3])
+    triangles = base + np.array([0, 1, 2, 0, 1, 2])  # the degenerate half is dropped below
+    indices = np.where(patches.is_triangle[:, None], triangles, quads)
+    keep = np.ones_like(indices, dtype=bool)
+    keep[patches.is_triangle, 3:] = False
+    return vertices, indices[keep].astype(np.uint32)
+
+
+class HemicubeRenderer:
+    """GPU objects for one set of patches and resolution: `coverage(frames)` per batch."""
+
+    def __init__(self, res: Resources, patches: Patches, resolution: int, scene_diameter: float):
+        ctx = res.ctx
+        self.ctx = ctx
+        self.patches = patches
+        self.resolution = resolution
+        self.patch_count = len(patches)
+        self.tiles_per_row = max(1, ATLAS_LIMIT // resolution)
+        tile_rows = max(1, ATLAS_LIMIT // (3 * resolution))
+        self.slots = self.tiles_per_row * tile_rows
+        self.atlas_size = (self.tiles_per_row * resolution, tile_rows * 3 * resolution)
+        self.row_length = self.patch_count + 1  # the last column: backs of patches
+
+        self.program = res.gpu.program("hemicube_item_buffer.vert", "hemicube_item_buffer.frag")
+        self.uniforms = {"near": 1e-3 * scene_diameter, "far": 4.0 * scene_diameter, "back_item": self.row_length}
+        vertices, indices = scene_geometry(patches)
+        self.vertex_buffer = res.buffer(vertices.tobytes())
+        self.index_buffer = res.buffer(indices.tobytes())
+        self.instance_buffer = res.buffer(reserve=self.slots * 5 * 17 * 4)
+        self.vao = res.vertex_array(
+            self.program,
+            [
+                (self.vertex_buffer, "3f 3f 1u", "in_position", "in_normal", "in_patch"),
+                (self.instance_buffer, "3f 3f 3f 3f 4f 1f/i",
+                 "in_eye", "in_right", "in_up", "in_forward", "in_tile", "in_up_min"),
+            ],
+            index_buffer=self.index_buffer,
+            index_element_size=4,
+        )
+        self.item_texture = res.texture(self.atlas_size, 1, dtype="u4")
+        self.item_texture.filter = (ctx.NEAREST, ctx.NEAREST)
+        self.depth = res.depth_renderbuffer(self.atlas_size)
+        self.framebuffer = res.framebuffer([self.item_texture], self.depth)
+
+        self.reduce = res.gpu.compute("hemicube_form_factor_rows.comp")
+        weights = fixed_point_weights(delta_form_factors(resolution))
+        self.weight_buffer = res.buffer(weights.tobytes())
+        self.row_buffer = res.buffer(reserve=self.slots * self.row_length * 4)
+
+    def rows(self, indices: np.ndarray) -> np.ndarray:
+        """Rows `indices` (at most `slots` of them) of F (float64, len(indices) x P)."""
+        return self.coverage(tuple(v[indices] for v in patch_frames(self.patches)))[:, :-1]
+
+    def coverage(self, hemicube_frames) -> np.ndarray:
+        """For hemi-cubes at `hemicube_frames` (at most `slots`): (count, P + 1) fractions of each
+        hemisphere (cosine-weighted) covered by each patch's front, then by backs of patches;
+        1 minus a row's sum is what sees the sky."""
+        ctx = self.ctx
+        count = len(hemicube_frames[0])
+        instances = face_instances(hemicube_frames, self.resolution, self.tiles_per_row, self.atlas_size)
+        self.instance_buffer.write(instances.tobytes())
+        for name, value in self.uniforms.items():
+            self.program[name] = value
+        self.framebuffer.use()
+        self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
+        ctx.enable_only(ctx.DEPTH_TEST)
+        self.vao.render(instances=count * 5)
+
+        self.row_buffer.clear()
+        self.item_texture.use(texture_unit("ITEM_BUFFER"))
+        self.weight_buffer.bind_to_storage_buffer(storage("DELTA_FORM_FACTORS"))
+        self.row_buffer.bind_to_storage_buffer(storage("FORM_FACTOR_ROWS"))
+        self.reduce["tile_size"] = (self.resolution, 3 * self.resolution)
+        self.reduce["tiles_per_row"] = self.tiles_per_row
+        self.reduce["row_length"] = self.row_length
+        self.reduce["slots"] = count
+        ctx.memory_barrier()
+        self.reduce.run(work_groups(self.resolution, 16), work_groups(3 * self.resolution, 16), count)
+        ctx.memory_barrier()
+        sums = np.frombuffer(self.row_buffer.read(size=count * self.row_length * 4), dtype=np.uint32)
+        return sums.reshape(count, self.row_length).astype(np.float64) / FORM_FACTOR_ONE
