@@ -1,0 +1,145 @@
+"""The GPU layer: every GL object a solve, a lightmap bake or a preview makes is released on
+success, on cancel and on a failure in any stage (moderngl's `context_gc` mode collects what
+was dropped unreleased); programs are compiled once per context; bindings are named once."""
+
+from __future__ import annotations
+
+import gc
+import re
+from dataclasses import replace
+
+import moderngl
+import pytest
+from scenes import closed_cube, surface
+
+from radiosity_addon.core import (GPU, LightmapSettings, SolveCancelled, SolveSettings, bake_lightmaps, load_scene,
+                                  render_preview, scene_from_dict, solve)
+from radiosity_addon.core.gpu import bindings
+from radiosity_addon.core.gpu.shaders import SHADERS_DIR
+
+
+class Injected(RuntimeError):
+    """The failure these tests inject."""
+
+
+@pytest.fixture
+def watched():
+    """A GPU on a fresh context in `context_gc` mode: objects dropped without release() land in
+    ctx.objects (released ones leave an InvalidObject there)."""
+    ctx = moderngl.create_context(standalone=True, backend="egl", require=430)
+    ctx.gc_mode = "context_gc"
+    gpu = GPU(ctx)
+    yield gpu
+    gpu.close()
+    ctx.release()
+
+
+def leaked(gpu) -> list[str]:
+    gc.collect()
+    return [type(obj).__name__ for obj in gpu.ctx.objects if type(obj).__name__ != "InvalidObject"]
+
+
+def lit_room():
+    """A closed grey cube lit by a point lamp, a sun through nothing and a world colour: every
+    shooter kind, the sky hemi-cubes and (hemi-cube method) the lamps' direct-light pass."""
+    data = closed_cube(reflectance=0.5, emission=0.0)
+    data["surfaces"].append(surface("block", [[0.4, 0.4, 0.3], [0.6, 0.4, 0.3], [0.6, 0.6, 0.3], [0.4, 0.6, 0.3]],
+                                    0.5, 0.0))
+    data["lights"] = [{"name": "bulb", "type": "point", "position": [0.5, 0.5, 0.8], "color": [1, 1, 1],
+                       "power": 10.0}]
+    data["world"] = {"color": [0.1, 0.1, 0.1]}
+    return scene_from_dict(data)
+
+
+PROGRESSIVE = SolveSettings(subdiv=2, elements=2, tolerance=1e-2, visibility_res=64)
+HEMICUBE = SolveSettings(method="hemicube", subdiv=2, hemicube_res=16, visibility_res=64)
+
+
+@pytest.mark.parametrize("settings", [PROGRESSIVE, HEMICUBE], ids=["progressive", "hemicube"])
+def test_a_solve_lightmaps_and_preview_release_everything(watched, settings):
+    scene = lit_room()
+    solution = solve(scene, settings, gpu=watched)
+    lightmaps = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16), gpu=watched)
+    render_preview(scene, lightmaps, width=32, height=32, gpu=watched)
+    assert leaked(watched) == []
+    assert len(watched.ctx.objects) > 0  # released objects passed through: the check saw them
+
+
+@pytest.mark.parametrize("settings", [PROGRESSIVE, HEMICUBE], ids=["progressive", "hemicube"])
+def test_a_cancelled_solve_releases_everything(watched, settings):
+    """Cancelled at the second check: the progressive method's second shot, the hemi-cube method's
+    first convergence check of the Jacobi sweeps (after the hemi-cubes' check)."""
+    calls = []
+    with pytest.raises(SolveCancelled):
+        solve(load_scene("cornell-box"), replace(settings, tolerance=1e-7), gpu=watched,
+              should_cancel=lambda: calls.append(1) or len(calls) >= 2)
+    assert leaked(watched) == []
+
+
+FAILURES = {  # stage -> (settings, object and method to break)
+    "shooter selection": (PROGRESSIVE, "radiosity_addon.core.progressive.selection.Selector.select"),
+    "visibility map": (PROGRESSIVE, "radiosity_addon.core.visibility.hemisphere.VisibilityMap.render"),
+    "shooting pass": (PROGRESSIVE, "radiosity_addon.core.shooting.shooting_pass.ShootingPass.shoot"),
+    "sky hemi-cubes": (PROGRESSIVE, "radiosity_addon.core.visibility.hemicube.HemicubeRenderer.coverage"),
+    "element readback": (PROGRESSIVE, "radiosity_addon.core.shooting.elements.ElementTextures.read_radiosity"),
+    "lamps into patches": (HEMICUBE, "radiosity_addon.core.shooting.shooting_pass.ShootingPass.shoot"),
+    "hemi-cube rows": (HEMICUBE, "radiosity_addon.core.visibility.hemicube.HemicubeRenderer.rows"),
+    "Jacobi sweeps": (HEMICUBE, "radiosity_addon.core.hemicube.linear_solvers.Convergence.done"),
+}
+
+
+@pytest.mark.parametrize("stage", FAILURES)
+def test_a_failure_in_any_solve_stage_releases_everything(watched, monkeypatch, stage):
+    settings, target = FAILURES[stage]
+
+    def broken(*args, **kwargs):
+        raise Injected(stage)
+
+    monkeypatch.setattr(target, broken)
+    with pytest.raises(Injected):
+        solve(lit_room(), settings, gpu=watched)
+    assert leaked(watched) == []
+
+
+@pytest.mark.parametrize("target", ["radiosity_addon.core.lightmap.bake.mip_levels",
+                                    "radiosity_addon.core.preview.render._surface_triangles"])
+def test_a_failure_while_baking_lightmaps_or_rendering_the_preview_releases_everything(watched, monkeypatch, target):
+    scene = lit_room()
+    solution = solve(scene, HEMICUBE, gpu=watched)
+    lightmaps = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16), gpu=watched)
+    calls = []
+
+    def broken_on_the_second_call(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise Injected(target)
+        return original(*args, **kwargs)
+
+    module, name = target.rsplit(".", 1)
+    original = getattr(__import__(module, fromlist=[name]), name)
+    monkeypatch.setattr(target, broken_on_the_second_call)
+    with pytest.raises(Injected):
+        if "preview" in target:
+            render_preview(scene, lightmaps, width=32, height=32, gpu=watched)
+        else:
+            bake_lightmaps(scene, solution, LightmapSettings(texel_density=16), gpu=watched)
+    assert leaked(watched) == []
+
+
+def test_programs_are_compiled_once_per_context(watched):
+    scene = lit_room()
+    solve(scene, PROGRESSIVE, gpu=watched)
+    compiled = watched.program_count
+    solve(scene, PROGRESSIVE, gpu=watched)
+    assert watched.program_count == compiled > 0
+
+
+def test_binding_names_are_unique_per_pass_and_every_shader_name_is_defined():
+    for group, slots in bindings.STORAGE_GROUPS.items():
+        assert len(set(slots.values())) == len(slots), f"{group}: two buffers share a binding point"
+        assert max(slots.values()) < 8, f"{group}: beyond OpenGL 4.3's guaranteed 8 storage bindings"
+        assert all(bindings.STORAGE[name] == slot for name, slot in slots.items()), f"{group}: a name moved slot"
+    defined = set(re.findall(r"#define (\w+)", bindings.glsl()))
+    sources = " ".join(p.read_text() for p in SHADERS_DIR.rglob("*") if p.is_file())
+    used = set(re.findall(r"\b((?:STORAGE|TEXTURE|IMAGE)_[A-Z_]+)\b", sources))
+    assert used and used <= defined, used - defined
