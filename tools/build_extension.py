@@ -42,8 +42,12 @@ def blender_ext_script() -> Path:
     return found[-1]
 
 
-def download_wheels() -> set[str]:
+def download_wheels(listed: set[str]) -> set[str]:
+    """The wheels in wheels/, downloaded by pip unless every wheel the manifest lists is there already
+    (so a build needs no network once they are)."""
     WHEELS_DIR.mkdir(exist_ok=True)
+    if listed and all((ROOT / wheel).is_file() for wheel in listed):
+        return {f"./wheels/{path.name}" for path in WHEELS_DIR.glob("*.whl")}
     for tags in PLATFORM_TAGS.values():
         for python in PYTHON_VERSIONS:
             command = [sys.executable, "-m", "pip", "download", "--quiet", "--disable-pip-version-check",
@@ -56,6 +60,10 @@ def download_wheels() -> set[str]:
                 sys.exit(f"error: pip could not download the wheels for Python {python} {tags[0]}:"
                          f" {errors[0] if errors else result.stderr.strip()[-300:]}")
     return {f"./wheels/{path.name}" for path in WHEELS_DIR.glob("*.whl")}
+
+
+def manifest_wheels() -> set[str]:
+    return set(tomllib.loads((ROOT / "blender_manifest.toml").read_text()).get("wheels", []))
 
 
 def check_manifest(downloaded: set[str]) -> dict:
@@ -83,7 +91,7 @@ def main(argv=None) -> int:
     parser.add_argument("--output-dir", default=str(ROOT / "dist"))
     args = parser.parse_args(argv)
     script = blender_ext_script()
-    manifest = check_manifest(download_wheels())
+    manifest = check_manifest(download_wheels(manifest_wheels()))
     output = Path(args.output_dir).resolve()
     output.mkdir(parents=True, exist_ok=True)
     prefix = f"{manifest['id']}-{manifest['version']}"
