@@ -277,3 +277,19 @@ def test_cli_progressive_writes_elements_and_report(tmp_path):
     assert data["unshot_fraction"] <= 0.05 and data["shots"] > 0
     assert {"emitted", "absorbed", "escaped", "unshot"} <= set(data["energy"])
     assert {"select", "visibility", "shoot", "mipmap"} <= set(data["timings"])
+
+
+def test_preview_snapshots_carry_the_ambient_term_and_converge_to_the_result(gpu):
+    """A progressive solve hands out snapshots as it goes; each is B so far + ρ · Ambient, whose
+    total reflected power (area-weighted) approaches the result's as the unshot power shrinks."""
+    scene = cube(0.5, {"ceiling": 1.0})
+    snapshots = []
+    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-4), gpu=gpu,
+                     preview=snapshots.append, preview_interval=0.0)
+    assert len(snapshots) >= solution.report.shots  # every shot, with interval 0
+    area = solution.patches.area
+    final = (area * solution.patch_radiosity[:, 0]).sum()
+    first, last = ((area * s.patch_radiosity[:, 0]).sum() for s in (snapshots[0], snapshots[-1]))
+    assert snapshots[0].report is None and snapshots[0].element_radiosity.shape == solution.element_radiosity.shape
+    # the ambient term makes even the first snapshot hold about the converged power (closed cube: exact R)
+    assert abs(first - final) / final < 0.25 and abs(last - final) / final < 1e-3

@@ -22,7 +22,8 @@ Scene                  arrays of surfaces (`corners`, `reflectance`, `emission`,
 
 Solving
 -------
-solve(scene, settings=None, progress=None, should_cancel=None, gpu=None) -> Solution
+solve(scene, settings=None, progress=None, should_cancel=None, gpu=None, preview=None,
+      preview_interval=2.0) -> Solution
     scene          the Scene to solve.
     settings       SolveSettings (None: the defaults the command line and the panel share):
                    method "progressive" | "hemicube"; subdiv N (every surface N x N) or, with
@@ -37,6 +38,10 @@ solve(scene, settings=None, progress=None, should_cancel=None, gpu=None) -> Solu
     gpu            a GPU to run on (its program cache is reused); None: a context of its own,
                    released afterwards. Every GL object a solve makes is released when it
                    returns or raises.
+    preview        preview(Solution) every `preview_interval` seconds of a progressive solve:
+                   the radiosity so far plus the ambient term (Cohen et al. 1988), for display
+                   only (its report is None); bake_lightmaps turns it into images. The
+                   hemi-cube method has no intermediate result and never calls it.
 Solution               patches, patch_radiosity (P, 3), element_radiosity (P, S, S, 3) or None,
                        report (Report: `to_dict()` is the report file, `summary_line()` the
                        panel's one line).

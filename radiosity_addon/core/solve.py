@@ -21,7 +21,7 @@ from .timing import ProgressCallback, StageTimer
 
 
 def solve(scene: Scene, settings: SolveSettings | None = None, progress: ProgressCallback | None = None,
-          should_cancel=None, gpu: GPU | None = None) -> Solution:
+          should_cancel=None, gpu: GPU | None = None, preview=None, preview_interval: float = 2.0) -> Solution:
     """Solve radiosity for `scene` (see core/__init__.py for the parameters)."""
     settings = settings or SolveSettings()
     settings.validate()
@@ -38,8 +38,10 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
                                                    should_cancel)
             elements = None
         else:
+            shown = None if preview is None else (
+                lambda patch_values, element_values: preview(Solution(patches, patch_values, element_values)))
             radiosity, elements, details = solve_progressive(solve_gpu, scene, patches, settings, effects, timer,
-                                                             progress, should_cancel)
+                                                             progress, should_cancel, shown, preview_interval)
     timer.timings["total"] = time.perf_counter() - started
     element_count = len(patches) * (settings.elements ** 2 if elements is not None else 1)
     report = Report(method=settings.method, settings=settings,

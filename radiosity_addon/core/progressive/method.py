@@ -69,11 +69,18 @@ class ProgressiveDetails:
                 "shots_per_second": self.shots_per_second}
 
 
+def patch_means(areas: np.ndarray, elements: np.ndarray) -> np.ndarray:
+    """(P, 3) area-weighted means of element values (P, S, S, 3) with element areas (P, S, S)."""
+    return (areas[..., None] * elements).sum(axis=(1, 2)) / areas.sum(axis=(1, 2))[:, None]
+
+
 def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
-                      timer: StageTimer, progress=None, should_cancel=None):
+                      timer: StageTimer, progress=None, should_cancel=None, preview=None, preview_interval=2.0):
     """(patch radiosity (P, 3), element radiosity (P, S, S, 3), ProgressiveDetails).
     `effects` (the scene analysis) may switch off visibility maps (nothing occludes) and
-    residual updates (no interreflection: only emitters and lamps ever shoot)."""
+    residual updates (no interreflection: only emitters and lamps ever shoot).
+    `preview(patch radiosity, element radiosity)` is called every `preview_interval` seconds with
+    the radiosity so far plus the ambient term ρ · Ambient (for display only)."""
     started = time.perf_counter()
     variant = VARIANTS[settings.visibility]
     tolerance = settings.effective_tolerance
@@ -104,6 +111,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
 
         shots = 0
         history = []  # (elapsed, unshot fraction) for the estimate of time left
+        last_preview = time.perf_counter()
         unshot_gpu = emitted.copy()
         stop_reason = "tolerance"
         while True:
@@ -123,6 +131,11 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                          + (f", ~{eta:.0f} s left" if eta is not None else ""),
                          {"shots": shots, "elapsed": elapsed, "eta": eta, "unshot_fraction": fraction_left,
                           "ambient": ambient(unshot_gpu).tolist()})
+            if preview is not None and time.perf_counter() - last_preview >= preview_interval:
+                with timer.stage("preview"):
+                    shown = textures.read_radiosity() + patches.reflectance[:, None, None, :] * ambient(unshot_gpu)
+                    preview(patch_means(textures.areas, shown), shown)
+                last_preview = time.perf_counter()
             if fraction_left <= tolerance or selection.patch < 0 or emitted_total <= 0:
                 break
             if shots >= max_shots:
@@ -144,7 +157,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             elements = textures.read_radiosity()
         areas = textures.areas
 
-    patch_radiosity = (areas[..., None] * elements).sum(axis=(1, 2)) / areas.sum(axis=(1, 2))[:, None]
+    patch_radiosity = patch_means(areas, elements)
     solve_seconds = time.perf_counter() - started
     details = ProgressiveDetails(
         shots=shots, stop_reason=stop_reason,
