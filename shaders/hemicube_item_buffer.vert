@@ -6,7 +6,8 @@
 
 in vec3 in_position;
 in vec3 in_normal;      // the triangle's front normal
-in uint in_patch;       // patch id
+in uint in_patch;       // patch id (a front patch)
+in int in_twin;         // its back patch, -1 when its back is not simulated
 
 in vec3 in_eye;         // per instance: hemi-cube centre
 in vec3 in_right;       // face axes: right, up, forward (world space)
@@ -42,6 +43,7 @@ void main() {
     float z = (c * (far + near) - 2.0 * far * near) / (far - near);
     gl_Position = vec4(x, y, z, c);
 
-    // Item 0 means nothing is seen (sky); backs of patches get their own item.
-    item = dot(in_eye - in_position, in_normal) > 0.0 ? in_patch + 1u : back_item;
+    // Item 0 means nothing is seen (sky); a back is its twin patch, or (single-sided) its own item.
+    bool front = dot(in_eye - in_position, in_normal) > 0.0;
+    item = front ? in_patch + 1u : (in_twin >= 0 ? uint(in_twin) + 1u : back_item);
 }

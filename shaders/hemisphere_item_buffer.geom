@@ -16,6 +16,7 @@ layout(triangle_strip, max_vertices = MAX_VERTICES) out;
 
 in vec3 v_position[];
 flat in uint v_patch[];
+flat in int v_twin[];
 
 uniform vec3 eye;
 uniform vec3 axis_x;
@@ -57,8 +58,9 @@ void main() {
         return;  // wholly behind the eye's hemisphere
     }
     vec3 normal = cross(v_position[2] - v_position[0], v_position[3] - v_position[1]);
-    // Backs of patches occlude but receive nothing: item 0 means "no patch".
-    uint id = dot(eye - v_position[0], normal) > 0.0 ? v_patch[0] + 1u : 0u;
+    // A back seen is its twin patch; a single-sided back occludes but receives nothing (item 0).
+    bool front = dot(eye - v_position[0], normal) > 0.0;
+    uint id = front ? v_patch[0] + 1u : (v_twin[0] >= 0 ? uint(v_twin[0]) + 1u : 0u);
     // Adaptive: as many segments per side as the patch's angular size needs
     // (a chord of SEGMENT_ANGLE radians strays ~angle^2/8 from the curved image).
     float extent = 0.0;

@@ -1,9 +1,10 @@
 #version 430
-// One shot: every receiving element gathers
-//   dB = rho_recv * B_shooter_unshot * F(element point -> shooter) * V
-// into its radiosity (padded tile, gutter texels copied from the element they
-// continue) and its residual (unpadded tile, weighted by element area so that
-// mip means are power per patch area). The shooter's own residual is cleared.
+// One shot: every receiving element gathers the light
+//   dH = B_shooter_unshot * F(element point -> shooter) * V
+// into its light (padded tile, gutter texels copied from the element they
+// continue; B = E + rho H), and dB = rho_recv * dH into its residual (unpadded
+// tile, weighted by element area so that mip means are power per patch area).
+// The shooter's own residual is cleared.
 // V is looked up in the shooter's hemispherical item buffer: the receiver
 // looks for its own patch id (or any patch of its own planar surface) at its
 // projected position, within SEARCH_RADIUS texels (dissertation Algorithm 8;
@@ -28,7 +29,7 @@
 #include "bilinear"
 layout(local_size_x = 64) in;
 
-layout(ELEMENT_FORMAT, binding = IMAGE_RADIOSITY) uniform image2D radiosity;  // rgba32f, or r32f for a grey scene
+layout(ELEMENT_FORMAT, binding = IMAGE_LIGHT) uniform image2D light;  // rgba32f, or r32f for a grey scene
 layout(ELEMENT_FORMAT, binding = IMAGE_RESIDUAL) uniform image2D residual;
 layout(binding = TEXTURE_ITEM_BUFFER) uniform usampler2D item_buffer;
 layout(binding = TEXTURE_DISTANCE_MAP) uniform sampler2D distance_map;  // distance from the eye of what each item texel shows (0: nothing)
@@ -219,13 +220,13 @@ void main() {
 #endif
                 ivec2 origin = ivec2(p % padded_tiles_per_row, p / padded_tiles_per_row) * (ELEMENTS + 2 * GUTTER)
                              + ivec2(GUTTER);
-                vec4 value = imageLoad(radiosity, origin + ivec2(i, j)) + vec4(delta, 0.0);
+                vec4 value = imageLoad(light, origin + ivec2(i, j)) + vec4(shooter_radiosity * f, 0.0);
                 // the element and the gutter texels that continue it (clamp to edge)
                 for (int dy = -GUTTER; dy <= GUTTER; ++dy) {
                     for (int dx = -GUTTER; dx <= GUTTER; ++dx) {
                         ivec2 k = ivec2(i + dx, j + dy);
                         if (clamp(k, ivec2(0), ivec2(ELEMENTS - 1)) == ivec2(i, j)) {
-                            imageStore(radiosity, origin + k, value);
+                            imageStore(light, origin + k, value);
                         }
                     }
                 }

@@ -44,7 +44,8 @@ def perpendicular_squares(receiver_reflectance=0.5, emitter_emission=1.0):
 
 
 def area_weighted_mean(solution, surface_index):
+    """A surface's area-weighted mean radiosity over its front patches (what its lightmap holds)."""
     patches = solution.patches
-    mask = patches.surface == surface_index
+    mask = (patches.surface == surface_index) & ~patches.is_back
     area = patches.area[mask]
     return (solution.patch_radiosity[mask] * area[:, None]).sum(axis=0) / area.sum()

@@ -37,7 +37,7 @@ ALLOWED = {
     "progressive": BASE | {"gpu", "scene", "visibility", "shooting"},
     "report": BASE | {"scene", "hemicube", "progressive"},
     "solution": BASE | {"scene", "report"},
-    "solve": BASE | {"gpu", "scene", "hemicube", "progressive", "report", "solution"},
+    "solve": BASE | {"gpu", "scene", "shooting", "hemicube", "progressive", "report", "solution"},
     "lightmap": BASE | {"gpu", "imaging", "scene", "solution"},
     "preview": BASE | {"gpu", "scene", "lightmap"},
 }

@@ -109,7 +109,7 @@ def test_one_shot_matches_numpy_kernel_in_element_order(gpu):
         shooting.shoot(shooter, visibility_map)
         gathered = textures.read_radiosity()[..., 0] / 0.5
         residual = textures.read_residual()[..., 0]
-        padded = textures.read_padded_radiosity()
+        padded = textures.read_padded_light()
     centres = element_centers(patches, s)
     expected = np.zeros((len(patches), s, s))
     for p in range(len(patches)):

@@ -62,7 +62,8 @@ def _patch_lookup(patches: Patches, surface_count: int) -> np.ndarray:
     """(surfaces, rows, 2 columns) patch index by (surface, grid row, grid column); -1 where none."""
     n = int(patches.split.max())
     lookup = np.full((surface_count, n, 2 * n), -1, dtype=np.int64)
-    lookup[patches.surface, patches.grid[:, 0], patches.grid[:, 1]] = np.arange(len(patches))
+    fronts = np.flatnonzero(~patches.is_back)  # the texels show the front
+    lookup[patches.surface[fronts], patches.grid[fronts, 0], patches.grid[fronts, 1]] = fronts
     return lookup
 
 
@@ -83,7 +84,7 @@ def surface_grid(patches: Patches, surface_index: int, patch_radiosity: np.ndarr
     """(rows·S, columns·S, 3) values of a quad surface on its regular grid of patches (S = 1) or
     elements, indexed [t row, s column]."""
     n_columns, n_rows = (int(v) for v in patches.split[surface_index])
-    members = np.flatnonzero(patches.surface == surface_index)
+    members = np.flatnonzero((patches.surface == surface_index) & ~patches.is_back)
     rows, columns = patches.grid[members, 0], patches.grid[members, 1]
     if element_radiosity is None:
         grid = np.zeros((n_rows, n_columns, 3))

@@ -15,7 +15,9 @@ class Solution:
     patches: Patches
     patch_radiosity: np.ndarray  # (P, 3) float64
     element_radiosity: np.ndarray | None  # (P, S, S, 3): [patch, t row, s column]; None for one value per patch
-    report: Report | None = None  # None only for solutions made by hand (tests)
+    report: Report | None = None  # None for preview snapshots and solutions made by hand (tests)
+    patch_light: np.ndarray | None = None  # (P, 3) light H arriving, B = E + ρH
+    element_light: np.ndarray | None = None  # (P, S, S, 3)
 
     def npz_arrays(self) -> dict:
         """The `solve --output OUT.npz` arrays (docs/architecture.md, Command line)."""

@@ -12,10 +12,11 @@ import numpy as np
 
 from .gpu import GPU, open_gpu
 from .hemicube import solve_hemicube
-from .progressive import solve_progressive
+from .progressive import patch_means, solve_progressive
 from .report import Counts, Report
 from .scene import Scene, check_has_emitter, effects_for, subdivide
 from .settings import SolveSettings
+from .shooting import element_areas
 from .solution import Solution
 from .timing import ProgressCallback, StageTimer
 
@@ -29,19 +30,20 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
     started = time.perf_counter()
     timer = StageTimer()
     with timer.stage("analyse"):
-        effects = effects_for(scene, settings.skip_unneeded)
+        effects, backs = effects_for(scene, settings.skip_unneeded)
     with timer.stage("subdivide"):
-        patches = subdivide(scene, settings.subdiv, settings.patch_size)
+        patches = subdivide(scene, settings.subdiv, settings.patch_size, backs)
     with open_gpu(gpu) as solve_gpu:
         if settings.method == "hemicube":
-            radiosity, details, _ = solve_hemicube(solve_gpu, scene, patches, settings, effects, timer, progress,
-                                                   should_cancel)
-            elements = None
+            radiosity, light, details, _ = solve_hemicube(solve_gpu, scene, patches, settings, effects, timer,
+                                                          progress, should_cancel)
+            elements = element_light = None
         else:
             shown = None if preview is None else (
                 lambda patch_values, element_values: preview(Solution(patches, patch_values, element_values)))
-            radiosity, elements, details = solve_progressive(solve_gpu, scene, patches, settings, effects, timer,
-                                                             progress, should_cancel, shown, preview_interval)
+            radiosity, elements, element_light, details = solve_progressive(
+                solve_gpu, scene, patches, settings, effects, timer, progress, should_cancel, shown, preview_interval)
+            light = patch_means(element_areas(patches, settings.elements), element_light)
     timer.timings["total"] = time.perf_counter() - started
     element_count = len(patches) * (settings.elements ** 2 if elements is not None else 1)
     report = Report(method=settings.method, settings=settings,
@@ -50,4 +52,5 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
                     timings=timer.timings, effects=effects, details=details,
                     radiosity_max=float(np.max(radiosity)))
     return Solution(patches=patches, patch_radiosity=np.asarray(radiosity, dtype=np.float64),
-                    element_radiosity=elements, report=report)
+                    element_radiosity=elements, report=report, patch_light=np.asarray(light, dtype=np.float64),
+                    element_light=element_light)

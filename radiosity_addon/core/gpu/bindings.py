@@ -20,7 +20,7 @@ STORAGE_GROUPS = {
     "lightmap": {"LATTICE_CORNERS": 0, "LATTICE_VALUES": 1},
 }
 TEXTURE_UNITS = {"ITEM_BUFFER": 0, "DISTANCE_MAP": 1, "RESIDUAL": 2, "LIGHTMAP": 0}
-IMAGE_UNITS = {"RADIOSITY": 0, "RESIDUAL": 1}
+IMAGE_UNITS = {"LIGHT": 0, "RESIDUAL": 1}
 
 SHOT_ENERGY_ONE = 1 << 30  # the shooting pass sums hit fractions in fixed point: 2^30 = 1
 FORM_FACTOR_ONE = 1 << 31  # hemi-cube delta form factors are summed as integers: 2^31 = 1

@@ -135,7 +135,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     maps = uv_maps[patches.surface[auto]]
     patch_uv[auto] = np.einsum("pij,pkj->pki", maps[..., :3], patches.corners[auto]) + maps[:, None, :, 3]
 
-    group = object_of_surface[patches.surface]
+    group = np.where(patches.is_back, -1, object_of_surface[patches.surface])  # a lightmap holds the front
     baked = np.flatnonzero(group >= 0)
     lattice = np.zeros((len(patches),) + (values.shape[1] + 2,) * 2 + (3,))
     lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
@@ -144,7 +144,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     with open_gpu(gpu) as lightmap_gpu:
         for name, indices in objects.items():
             size = layouts[name]
-            mine = np.flatnonzero(np.isin(patches.surface, indices))
+            mine = np.flatnonzero(np.isin(patches.surface, indices) & ~patches.is_back)
             corners_texels = patch_uv[mine] * np.asarray(size, dtype=np.float64)
             texel_values, signed_ids = rasterize(lightmap_gpu, corners_texels, lattice[mine], size)
             covered = signed_ids != 0

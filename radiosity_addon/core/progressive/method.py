@@ -76,7 +76,8 @@ def patch_means(areas: np.ndarray, elements: np.ndarray) -> np.ndarray:
 
 def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
                       timer: StageTimer, progress=None, should_cancel=None, preview=None, preview_interval=2.0):
-    """(patch radiosity (P, 3), element radiosity (P, S, S, 3), ProgressiveDetails).
+    """(patch radiosity (P, 3), element radiosity (P, S, S, 3), element light H (P, S, S, 3),
+    ProgressiveDetails), with B = E + ρH.
     `effects` (the scene analysis) may switch off visibility maps (nothing occludes) and
     residual updates (no interreflection: only emitters and lamps ever shoot).
     `preview(patch radiosity, element radiosity)` is called every `preview_interval` seconds with
@@ -90,6 +91,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
     ledger = EnergyLedger(emitted)
     ambient = ambient_term(patches)
     shooters = PatchShooters(patches)
+    drawn = patches.drawn
     with gpu.resources() as res:
         with timer.stage("setup"):
             textures = ElementTextures(res, patches, settings.elements, channels=effects.channels)
@@ -146,7 +148,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             ledger.pending = shooter.power
             if effects.occlusion:
                 with timer.stage("visibility"):
-                    visibility_map.render(shooter.position, shooter.axes, skip_patch=shooter.patch)
+                    visibility_map.render(shooter.position, shooter.axes, skip_patch=drawn[shooter.patch])
             with timer.stage("shoot"):
                 shooting.shoot(shooter, visibility_map)
             with timer.stage("mipmap"):
@@ -154,7 +156,8 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             shots += 1
 
         with timer.stage("readback"):
-            elements = textures.read_radiosity()
+            light = textures.read_light()
+        elements = textures.radiosity(light)
         areas = textures.areas
 
     patch_radiosity = patch_means(areas, elements)
@@ -173,4 +176,4 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                              texel_bytes=16 if effects.channels == 3 else 4,
                              residual_updates=bool(effects.interreflection), direct=direct),
     )
-    return patch_radiosity, elements, details
+    return patch_radiosity, elements, light, details

@@ -10,7 +10,11 @@ any GPU work, so a solve simulates only those (the report's `effects`).
   must have a vertex strictly in front of the other's plane, both ways): light then
   bounces at most once, B = E + ρ F E;
 - rows: patches with zero reflectance receive nothing they could reflect, so neither a
-  hemi-cube nor a linear-solve row is spent on them.
+  hemi-cube nor a linear-solve row is spent on them;
+- back sides: a two-sided surface's back (Blender's faces all are) is simulated unless nothing
+  lies strictly behind its plane (then whatever its back sends out or receives meets no
+  surface), or it belongs to a closed, consistently oriented, outward-facing mesh with no
+  emitter inside its bounds (the back faces the mesh's own dark inside).
 
 The pairwise plane tests stop at the first pair that decides them (a furnished room: within
 the first chunk) and answer "present" (simulate it) once they would cost more than
@@ -24,7 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SceneError
+from .geometry import reversed_corners
 from .model import Scene
+from .topology import components
 
 PLANE_TOLERANCE = 1e-6  # relative to the scene diameter
 ROWS_PER_CHUNK = 256
@@ -37,11 +43,13 @@ class SceneEffects:
     channels: int
     occlusion: bool
     interreflection: bool
+    back_sides: int = 0  # two-sided surfaces whose back is simulated
+    back_sides_skipped: int = 0  # two-sided surfaces whose back can neither send nor receive
 
     @classmethod
-    def everything(cls, emitters: int) -> "SceneEffects":
+    def everything(cls, emitters: int, back_sides: int = 0) -> "SceneEffects":
         """The full simulation (what a solve does with skips disabled)."""
-        return cls(emitters=emitters, channels=3, occlusion=True, interreflection=True)
+        return cls(emitters=emitters, channels=3, occlusion=True, interreflection=True, back_sides=back_sides)
 
 
 def _plane_heights(scene: Scene, planes: slice, points: np.ndarray) -> np.ndarray:
@@ -127,15 +135,88 @@ def check_has_emitter(scene: Scene) -> None:
         )
 
 
-def analyse(scene: Scene) -> SceneEffects:
+def _something_behind(scene: Scene, candidates: np.ndarray) -> np.ndarray:
+    """(len(candidates),) bool: some surface corner lies strictly behind the candidate's plane
+    (exactly when the pairs fit the budget, else tested on the scene's bounding box corners)."""
+    tolerance = PLANE_TOLERANCE * scene.diameter
+    if len(candidates) * len(scene) * 4 <= PAIR_BUDGET:
+        points = scene.corners.reshape(-1, 3)
+    else:
+        low, high = scene.bounds
+        points = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1]) for z in (low[2], high[2])])
+    behind = np.zeros(len(candidates), dtype=bool)
+    for rows in _chunks(len(candidates)):
+        behind[rows] = np.any(_plane_heights(scene, candidates[rows], points) < -tolerance, axis=1)
+    return behind
+
+
+def _emitters_inside(scene: Scene, parts) -> np.ndarray:
+    """(components,) bool: an emitter of another component (an emissive surface's corner) or a lamp
+    (position, area corners) lies within the component's bounding box."""
+    emissive = np.flatnonzero(np.any(scene.emission > 0, axis=1))
+    points = [scene.corners[emissive].reshape(-1, 3)]
+    owners = [np.repeat(parts.label[emissive], 4)]
+    lamp_points = [lamp.position[None] for lamp in scene.lamps if lamp.position is not None]
+    lamp_points += [lamp.vertices for lamp in scene.lamps if lamp.vertices is not None]
+    if lamp_points:
+        points.append(np.concatenate(lamp_points))
+        owners.append(np.full(len(points[-1]), -1))
+    points, owners = np.concatenate(points), np.concatenate(owners)
+    lit = np.zeros(parts.count, dtype=bool)
+    if len(points) == 0:
+        return lit
+    for rows in _chunks(parts.count):
+        ids = np.arange(rows.start, rows.stop)
+        inside = np.all((points[None] >= parts.low[rows, None]) & (points[None] <= parts.high[rows, None]), axis=2)
+        lit[rows] = np.any(inside & (owners[None] != ids[:, None]), axis=1)
+    return lit
+
+
+def simulated_backs(scene: Scene, skip_unneeded: bool = True) -> np.ndarray:
+    """(S,) bool: the two-sided surfaces whose back side the solve simulates (module doc)."""
+    two_sided = scene.two_sided.copy()
+    if not skip_unneeded or not two_sided.any():
+        return two_sided
+    candidates = np.flatnonzero(two_sided)
+    keep = _something_behind(scene, candidates)
+    parts = components(scene)
+    dark_inside = parts.closed & (parts.volume > 0) & ~_emitters_inside(scene, parts)
+    keep &= ~dark_inside[parts.label[candidates]]
+    backs = np.zeros(len(scene), dtype=bool)
+    backs[candidates[keep]] = True
+    return backs
+
+
+def with_backs(scene: Scene, backs: np.ndarray) -> Scene:
+    """The scene with the simulated backs as surfaces of their own (reversed), for the plane tests."""
+    if not backs.any():
+        return scene
+    flipped = reversed_corners(scene.corners[backs], scene.is_triangle[backs])
+    index = np.concatenate([np.arange(len(scene)), np.flatnonzero(backs)])
+    return Scene(names=[scene.names[i] for i in index], corners=np.concatenate([scene.corners, flipped]),
+                 corner_count=scene.corner_count[index], reflectance=scene.reflectance[index],
+                 emission=scene.emission[index], object_index=scene.object_index[index],
+                 object_names=scene.object_names, uv=scene.uv[index], has_uv=scene.has_uv[index],
+                 two_sided=np.zeros(len(index), dtype=bool), extras=scene.extras)
+
+
+def analyse(scene: Scene, backs: np.ndarray | None = None) -> SceneEffects:
+    backs = simulated_backs(scene) if backs is None else backs
+    sided = with_backs(scene, backs)
     return SceneEffects(
         emitters=emitter_count(scene),
         channels=1 if is_grey(scene) else 3,
-        occlusion=can_occlude(scene),
-        interreflection=can_interreflect(scene),
+        occlusion=can_occlude(sided),
+        interreflection=can_interreflect(sided),
+        back_sides=int(backs.sum()),
+        back_sides_skipped=int(scene.two_sided.sum() - backs.sum()),
     )
 
 
-def effects_for(scene: Scene, skip_unneeded: bool) -> SceneEffects:
-    """What to simulate: the analysis, or everything when skips are disabled."""
-    return analyse(scene) if skip_unneeded else SceneEffects.everything(emitter_count(scene))
+def effects_for(scene: Scene, skip_unneeded: bool) -> tuple[SceneEffects, np.ndarray]:
+    """What to simulate — the analysis, or everything when skips are disabled — and the mask of
+    surfaces whose back is simulated."""
+    backs = simulated_backs(scene, skip_unneeded)
+    if not skip_unneeded:
+        return SceneEffects.everything(emitter_count(scene), int(backs.sum())), backs
+    return analyse(scene, backs), backs

@@ -67,3 +67,10 @@ def area_centroid(corners: np.ndarray) -> np.ndarray:
     centroid_second = (c[:, 0] + c[:, 2] + c[:, 3]) / 3
     total = (first + second)[:, None]
     return (first[:, None] * centroid_first + second[:, None] * centroid_second) / total
+
+
+def reversed_corners(corners: np.ndarray, is_triangle: np.ndarray) -> np.ndarray:
+    """The same polygons seen from the back: quads (c0, c3, c2, c1), triangles (c0, c2, c1, c1)."""
+    flipped = corners[:, [0, 3, 2, 1]]
+    flipped[is_triangle] = corners[is_triangle][:, [0, 2, 1, 1]]
+    return flipped

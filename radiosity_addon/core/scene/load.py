@@ -22,7 +22,7 @@ BUNDLED_SCENES_DIR = Path(__file__).parent / "scenes"
 
 
 def _surface_entry(entry, index: int) -> tuple:
-    """(name, corners (4, 3), count, reflectance, emission, object, uv (4, 2) or None) of one entry."""
+    """(name, corners (4, 3), count, reflectance, emission, object, uv (4, 2) or None, two-sided) of one entry."""
     if not isinstance(entry, dict):
         raise SceneError(f"surface #{index}: must be an object with name, vertices, reflectance, emission")
     name = entry.get("name")
@@ -48,7 +48,10 @@ def _surface_entry(entry, index: int) -> tuple:
     obj = entry.get("object", name)
     if not isinstance(obj, str) or not obj:
         raise SceneError(f"{where}: 'object' must be a non-empty string")
-    return name, padded_corners(vertices), len(vertices), reflectance, emission, obj, uv
+    two_sided = entry.get("two_sided", False)
+    if not isinstance(two_sided, bool):
+        raise SceneError(f"{where}: 'two_sided' must be true or false, got {two_sided!r}")
+    return name, padded_corners(vertices), len(vertices), reflectance, emission, obj, uv, two_sided
 
 
 def scene_from_dict(data: dict, require_emitter: bool = True) -> Scene:
@@ -58,7 +61,7 @@ def scene_from_dict(data: dict, require_emitter: bool = True) -> Scene:
     if not data["surfaces"]:
         raise SceneError("scene: the 'surfaces' list is empty")
     entries = [_surface_entry(entry, k) for k, entry in enumerate(data["surfaces"])]
-    names, corners, counts, reflectance, emission, objects, uvs = (list(column) for column in zip(*entries))
+    names, corners, counts, reflectance, emission, objects, uvs, two_sided = (list(column) for column in zip(*entries))
     duplicates = sorted(name for name, count in Counter(names).items() if count > 1)
     if duplicates:
         raise SceneError(f"surface '{duplicates[0]}': the name is used by more than one surface")
@@ -72,7 +75,7 @@ def scene_from_dict(data: dict, require_emitter: bool = True) -> Scene:
     scene = Scene(names=names, corners=corners, corner_count=counts, reflectance=reflectance, emission=emission,
                   object_index=np.array([object_of[o] for o in objects], dtype=np.int64), object_names=object_names,
                   uv=np.stack([uv if uv is not None else np.zeros((4, 2)) for uv in uvs]), has_uv=has_uv,
-                  two_sided=np.zeros(len(names), dtype=bool),
+                  two_sided=np.array(two_sided, dtype=bool),
                   extras={k: v for k, v in data.items() if k != "surfaces"})
     if require_emitter:
         check_has_emitter(scene)

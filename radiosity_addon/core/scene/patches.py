@@ -1,6 +1,10 @@
 """Surfaces split into patches (vectorized numpy), every patch stored as a quad of four corners
 (a triangle's sub-triangles repeat their last corner), the bilinear map of `geometry`.
 
+A two-sided surface whose back the scene analysis simulates gets back patches too: the same
+pieces with their corners in reverse order (so their normal points the other way), after all
+the fronts. `back_of` and `twin` pair them.
+
 Two ways to split (`SolveSettings`):
 - uniform: every surface N x N (quads on a bilinear grid, triangles into N² triangles);
 - by size: each surface into pieces about `patch_size` across — a quad into ceil(side /
@@ -16,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..settings import MAX_SPLIT
-from .geometry import area_centroid, area_vector, bilinear
+from .geometry import area_centroid, area_vector, bilinear, reversed_corners
 from .model import Scene
 
 
@@ -30,9 +34,36 @@ class Patches:
     is_triangle: np.ndarray  # (P,) bool: c3 repeats c2
     grid: np.ndarray  # (P, 2) int (row along t, column along s) of the patch in its surface's split
     split: np.ndarray  # (S, 2) int per surface: (columns along s, rows along t); triangles (n, n)
+    back_of: np.ndarray | None = None  # (P,) int: the front patch a back patch mirrors, -1 for fronts
+    twin: np.ndarray | None = None  # (P,) int: a front patch's back patch, -1 when its back is not simulated
+
+    def __post_init__(self):
+        if self.back_of is None:
+            self.back_of = np.full(len(self.corners), -1, dtype=np.int64)
+        if self.twin is None:
+            self.twin = np.full(len(self.corners), -1, dtype=np.int64)
 
     def __len__(self) -> int:
         return len(self.corners)
+
+    @property
+    def is_back(self) -> np.ndarray:
+        return self.back_of >= 0
+
+    @property
+    def front_count(self) -> int:
+        """Fronts come first: patches [0, front_count) are fronts, the rest their backs."""
+        return int(np.count_nonzero(self.back_of < 0))
+
+    @property
+    def drawn(self) -> np.ndarray:
+        """(P,) the front patch whose geometry shows each patch in item buffers (itself for fronts)."""
+        return np.where(self.back_of >= 0, self.back_of, np.arange(len(self.corners)))
+
+    @property
+    def plane(self) -> np.ndarray:
+        """(P,) plane id: the surface for fronts, surfaces + surface for backs (the other side)."""
+        return np.where(self.back_of >= 0, self.surface + len(self.split), self.surface)
 
     @property
     def area_vector(self) -> np.ndarray:
@@ -100,8 +131,27 @@ def split_counts(scene: Scene, subdiv: int | None, patch_size: float) -> np.ndar
     return np.where(scene.is_triangle[:, None], triangle[:, None], np.stack([along_s, along_t], axis=1))
 
 
-def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5) -> Patches:
-    """Split every surface N x N (`subdiv`), or by `patch_size` when subdiv is None."""
+def with_back_patches(patches: Patches, backs: np.ndarray) -> Patches:
+    """`patches` followed by a back patch for every patch of a surface in the mask `backs` (S,)."""
+    fronts = np.flatnonzero(backs[patches.surface])
+    if len(fronts) == 0:
+        return patches
+    count = len(patches)
+    twin = np.full(count + len(fronts), -1, dtype=np.int64)
+    twin[fronts] = count + np.arange(len(fronts))
+    back_of = np.concatenate([np.full(count, -1, dtype=np.int64), fronts])
+    take = np.concatenate([np.arange(count), fronts])
+    corners = np.concatenate([patches.corners, reversed_corners(patches.corners[fronts], patches.is_triangle[fronts])])
+    uv = np.concatenate([patches.uv, reversed_corners(patches.uv[fronts], patches.is_triangle[fronts])])
+    return Patches(corners=corners, uv=uv, surface=patches.surface[take], reflectance=patches.reflectance[take],
+                   emission=patches.emission[take], is_triangle=patches.is_triangle[take], grid=patches.grid[take],
+                   split=patches.split, back_of=back_of, twin=twin)
+
+
+def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
+              backs: np.ndarray | None = None) -> Patches:
+    """Split every surface N x N (`subdiv`), or by `patch_size` when subdiv is None; surfaces in
+    the mask `backs` get back patches too."""
     split = split_counts(scene, subdiv, patch_size)
     keys = np.concatenate([scene.is_triangle[:, None].astype(np.int64), split], axis=1)
     groups, group_of = np.unique(keys, axis=0, return_inverse=True)
@@ -123,7 +173,7 @@ def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5) 
     surface = np.concatenate([p[0] for p in parts])
     order = np.argsort(surface, kind="stable")  # surface by surface, each in its grid order
     surface = surface[order]
-    return Patches(
+    patches = Patches(
         corners=np.concatenate([p[1] for p in parts])[order],
         uv=np.concatenate([p[2] for p in parts])[order],
         surface=surface.astype(np.int32),
@@ -133,3 +183,4 @@ def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5) 
         grid=np.concatenate([p[3] for p in parts])[order].astype(np.int32),
         split=split,
     )
+    return patches if backs is None else with_back_patches(patches, backs)

@@ -54,8 +54,8 @@ def shoot_direct_light(res: Resources, scene: Scene, patches: Patches, elements:
 
 def direct_light_on_patches(res: Resources, scene: Scene, patches: Patches, visibility: str, visibility_res: int,
                             occlusion: bool) -> tuple[np.ndarray, DirectLightWork]:
-    """(P, 3) radiance each patch reflects of the lamps and the sky at its centre (ρ · H), for the
-    hemi-cube method's emission term: the shooting pass with one element per patch."""
+    """(P, 3) light H each patch gets from the lamps and the sky at its centre (it reflects ρ · H),
+    for the hemi-cube method's emission term: the shooting pass with one element per patch."""
     with res.gpu.resources() as scoped:
         textures = ElementTextures(scoped, patches, 1)
         buffers = PatchBuffers(scoped, patches, textures)
@@ -63,5 +63,5 @@ def direct_light_on_patches(res: Resources, scene: Scene, patches: Patches, visi
         shooting = ShootingPass(scoped, textures, buffers, "exact", VARIANTS[visibility].search_radius,
                                 occluder_margin=VARIANTS[visibility].occluder_margin, occlusion=occlusion)
         work = shoot_direct_light(scoped, scene, patches, 1, shooting, visibility_map, occlusion)
-        reflected = textures.read_radiosity()[:, 0, 0] - patches.emission
-    return np.maximum(reflected, 0.0), work
+        light = textures.read_light()[:, 0, 0]
+    return light, work

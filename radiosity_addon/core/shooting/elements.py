@@ -4,10 +4,12 @@ Each patch owns an S x S grid of elements (receivers); element [j, i] sits at
 bilinear parameters s = (i + 0.5)/S, t = (j + 0.5)/S of its patch. Two float32
 RGBA textures hold them as tiles, one tile per patch, row-major in an atlas:
 
-- **radiosity**: tiles padded with a gutter of GUTTER texels. The shooting pass
-  writes each gutter texel with the value of the element it continues (clamp
-  to edge), so filtered reads at tile edges stay inside the patch; the result
-  equals `padding.pad_tiles(elements, GUTTER)` (tested).
+- **light**: the light H gathered so far (radiosity B = E + ρH): tiles padded with
+  a gutter of GUTTER texels. The shooting pass writes each gutter texel with the
+  value of the element it continues (clamp to edge), so filtered reads at tile
+  edges stay inside the patch; the result equals `imaging.pad_tiles(elements,
+  GUTTER)` (tested). H rather than B, so surfaces that reflect nothing (ρ = 0) still
+  know the light they receive — what a "light" lightmap holds.
 - **residual** (unshot radiosity): unpadded S x S tiles on multiples of S, so
   mip level log2(S) holds one texel per patch, the tile mean. Texels store the
   residual times the element's area weight a_e S^2 / A, so the mean is the
@@ -22,7 +24,6 @@ import math
 import numpy as np
 
 from ..gpu import Resources
-from ..imaging import pad_tiles
 from ..scene import Patches
 from ..scene.geometry import bilinear
 
@@ -64,7 +65,7 @@ class ElementLayout:
         self.padded = elements + 2 * gutter
         self.level = int(math.log2(elements))  # mip level with one texel per residual tile
         self.residual_tiles_per_row, self.residual_size = self._atlas(elements)
-        self.padded_tiles_per_row, self.radiosity_size = self._atlas(self.padded)
+        self.padded_tiles_per_row, self.light_size = self._atlas(self.padded)
 
     def _atlas(self, tile: int) -> tuple[int, tuple[int, int]]:
         per_row = max(1, min(math.ceil(math.sqrt(self.patch_count)), MAX_TEXTURE_SIZE // tile))
@@ -86,7 +87,7 @@ class ElementLayout:
         """(P, T, T, C) tiles -> atlas image (H, W, C), unused tiles zero."""
         tile = self.padded if padded else self.elements
         per_row = self.padded_tiles_per_row if padded else self.residual_tiles_per_row
-        w, h = self.radiosity_size if padded else self.residual_size
+        w, h = self.light_size if padded else self.residual_size
         rows = h // tile
         c = tiles.shape[-1]
         full = np.zeros((rows * per_row, tile, tile, c), dtype=tiles.dtype)
@@ -95,7 +96,7 @@ class ElementLayout:
 
 
 class ElementTextures:
-    """The radiosity and residual textures of one solve, initialised to the emission.
+    """The light and residual textures of one solve: no light gathered yet, the emission unshot.
     `channels` 3: RGBA32F texels; 1 (a grey scene): R32F texels holding the one channel
     (the shaders' vec4 math then carries zeros in g, b, a)."""
 
@@ -103,17 +104,18 @@ class ElementTextures:
         ctx = res.ctx
         self.ctx = ctx
         self.channels = channels
+        self.emission = np.asarray(patches.emission, dtype=np.float64)
+        self.reflectance = np.asarray(patches.reflectance, dtype=np.float64)
         self.layout = layout = ElementLayout(len(patches), elements, gutter)
         self.areas = element_areas(patches, elements)  # (P, S, S) float64
         self.weights = self.areas * elements ** 2 / patches.area[:, None, None]  # a_e S^2 / A
-        emission = np.broadcast_to(patches.emission[:, None, None, :], (len(patches), elements, elements, 3))
+        emission = np.broadcast_to(self.emission[:, None, None, :], (len(patches), elements, elements, 3))
         components = 4 if channels == 3 else 1
         texels = lambda a: (np.concatenate([a, np.zeros(a.shape[:-1] + (1,))], axis=-1)  # noqa: E731
                             if components == 4 else a[..., :1])
 
-        radiosity = layout.atlas(texels(pad_tiles(emission, gutter)), padded=True)
-        self.radiosity = res.texture(layout.radiosity_size, components, radiosity.astype(np.float32).tobytes(),
-                                     dtype="f4")
+        self.light = res.texture(layout.light_size, components, dtype="f4")
+        self.light.write(np.zeros(layout.light_size[::-1] + (components,), dtype=np.float32).tobytes())
         residual = layout.atlas(texels(emission * self.weights[..., None]), padded=False)
         self.residual = res.texture(layout.residual_size, components, residual.astype(np.float32).tobytes(),
                                     dtype="f4")
@@ -136,16 +138,24 @@ class ElementTextures:
         else:  # S = 1: level 0 already holds one texel per patch (no mip levels: keep it complete)
             self.residual.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
 
-    def read_padded_radiosity(self) -> np.ndarray:
-        """(P, S+2g, S+2g, 3) float64: the padded radiosity tiles."""
-        w, h = self.layout.radiosity_size
-        image = np.frombuffer(self.radiosity.read(), dtype=np.float32).reshape(h, w, self.radiosity.components)
+    def read_padded_light(self) -> np.ndarray:
+        """(P, S+2g, S+2g, 3) float64: the padded light tiles."""
+        w, h = self.layout.light_size
+        image = np.frombuffer(self.light.read(), dtype=np.float32).reshape(h, w, self.light.components)
         return self._rgb(self.layout.tiles(image, padded=True)).astype(np.float64)
+
+    def read_light(self) -> np.ndarray:
+        """(P, S, S, 3) float64 light H gathered by each element."""
+        g, s = self.layout.gutter, self.layout.elements
+        return self.read_padded_light()[:, g:g + s, g:g + s]
+
+    def radiosity(self, light: np.ndarray) -> np.ndarray:
+        """(P, S, S, 3) element radiosity B = E + ρH of element light `light`."""
+        return self.emission[:, None, None, :] + self.reflectance[:, None, None, :] * light
 
     def read_radiosity(self) -> np.ndarray:
         """(P, S, S, 3) float64 element radiosity."""
-        g, s = self.layout.gutter, self.layout.elements
-        return self.read_padded_radiosity()[:, g:g + s, g:g + s]
+        return self.radiosity(self.read_light())
 
     def read_residual(self) -> np.ndarray:
         """(P, S, S, 3) float64 unshot radiosity per element (the area weight divided out)."""

@@ -30,8 +30,8 @@ class PatchBuffers:
             "PATCH_REFLECTANCE": res.buffer(pad(patches.reflectance, np.zeros((len(patches), 1))).tobytes()),
             "ELEMENT_WEIGHTS": res.buffer(textures.weights.astype(np.float32).tobytes()),
             "SHOT_ENERGY": res.buffer(reserve=16),
-            # patches of one scene surface are coplanar: the visibility lookup accepts any of them
-            "PATCH_PLANE": res.buffer(patches.surface.astype(np.int32).tobytes()),
+            # patches of one side of a surface are coplanar: the visibility lookup accepts any of them
+            "PATCH_PLANE": res.buffer(patches.plane.astype(np.int32).tobytes()),
         }
         self.buffers["SHOT_ENERGY"].clear()
 
@@ -89,7 +89,7 @@ class ShootingPass:
         if self.visibility is not None:
             self.visibility.bind_to_storage_buffer(storage("RECORDED_VISIBILITY"))
         visibility_map.bind()
-        self.textures.radiosity.bind_to_image(image_unit("RADIOSITY"), read=True, write=True)
+        self.textures.light.bind_to_image(image_unit("LIGHT"), read=True, write=True)
         self.textures.residual.bind_to_image(image_unit("RESIDUAL"), read=True, write=True, level=0)
         self.ctx.memory_barrier()
         groups = work_groups(self.element_count, 64)

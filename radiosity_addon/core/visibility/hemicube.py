@@ -83,19 +83,22 @@ def face_instances(hemicube_frames, resolution: int, tiles_per_row: int, atlas_s
 
 
 def scene_geometry(patches: Patches) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex rows (position, normal, patch id) and triangle indices of all patches."""
-    count = len(patches)
-    normal = np.repeat(patches.normal, 4, axis=0).astype(np.float32)
-    position = patches.corners.reshape(-1, 3).astype(np.float32)
-    ids = np.repeat(np.arange(count, dtype=np.uint32), 4)
-    vertices = np.empty(count * 4, dtype=[("p", "f4", 3), ("n", "f4", 3), ("id", "u4")])
-    vertices["p"], vertices["n"], vertices["id"] = position, normal, ids
+    """Vertex rows (position, normal, patch id, twin id) and triangle indices of the front patches:
+    a back patch is drawn as its front seen from behind (the twin id), so coincident sides never
+    fight over depth."""
+    count = patches.front_count
+    normal = np.repeat(patches.normal[:count], 4, axis=0).astype(np.float32)
+    position = patches.corners[:count].reshape(-1, 3).astype(np.float32)
+    vertices = np.empty(count * 4, dtype=[("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4")])
+    vertices["p"], vertices["n"] = position, normal
+    vertices["id"] = np.repeat(np.arange(count, dtype=np.uint32), 4)
+    vertices["twin"] = np.repeat(patches.twin[:count].astype(np.int32), 4)
     base = (np.arange(count) * 4)[:, None]
     quads = base + np.array([0, 1, 2, 0, 2, 3])
     triangles = base + np.array([0, 1, 2, 0, 1, 2])  # the degenerate half is dropped below
-    indices = np.where(patches.is_triangle[:, None], triangles, quads)
+    indices = np.where(patches.is_triangle[:count, None], triangles, quads)
     keep = np.ones_like(indices, dtype=bool)
-    keep[patches.is_triangle, 3:] = False
+    keep[patches.is_triangle[:count], 3:] = False
     return vertices, indices[keep].astype(np.uint32)
 
 
@@ -123,7 +126,7 @@ class HemicubeRenderer:
         self.vao = res.vertex_array(
             self.program,
             [
-                (self.vertex_buffer, "3f 3f 1u", "in_position", "in_normal", "in_patch"),
+                (self.vertex_buffer, "3f 3f 1u 1i", "in_position", "in_normal", "in_patch", "in_twin"),
                 (self.instance_buffer, "3f 3f 3f 3f 4f 1f/i",
                  "in_eye", "in_right", "in_up", "in_forward", "in_tile", "in_up_min"),
             ],

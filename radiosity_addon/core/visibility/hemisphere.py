@@ -64,11 +64,14 @@ class VisibilityMap:
         self.variant = VARIANTS[variant]
         self.program = self._link(res.gpu, self.variant.tessellation)
         self.scene_diameter = scene_diameter
-        vertices = np.empty(len(patches) * 4, dtype=[("p", "f4", 3), ("id", "u4")])
-        vertices["p"] = patches.corners.reshape(-1, 3)
-        vertices["id"] = np.repeat(np.arange(len(patches), dtype=np.uint32), 4)
+        count = patches.front_count  # a back is drawn as its front seen from behind (its twin id)
+        vertices = np.empty(count * 4, dtype=[("p", "f4", 3), ("id", "u4"), ("twin", "i4")])
+        vertices["p"] = patches.corners[:count].reshape(-1, 3)
+        vertices["id"] = np.repeat(np.arange(count, dtype=np.uint32), 4)
+        vertices["twin"] = np.repeat(patches.twin[:count].astype(np.int32), 4)
         self.vertex_buffer = res.buffer(vertices.tobytes())
-        self.vao = res.vertex_array(self.program, [(self.vertex_buffer, "3f 1u", "in_position", "in_patch")])
+        self.vao = res.vertex_array(self.program, [(self.vertex_buffer, "3f 1u 1i", "in_position", "in_patch",
+                                                    "in_twin")])
         self.items = res.texture((resolution, resolution), 1, dtype="u4")
         self.items.filter = (ctx.NEAREST, ctx.NEAREST)
         self.distances = res.texture((resolution, resolution), 1, dtype="f4")
@@ -93,7 +96,8 @@ class VisibilityMap:
         raise error
 
     def render(self, eye, axes, skip_patch: int = -1, ortho_extent: float = 0.0) -> None:
-        """Draw the item buffer from `eye`, axes = (x, y, pole); `skip_patch` is left out.
+        """Draw the item buffer from `eye`, axes = (x, y, pole); the front patch `skip_patch` (and
+        with it its back) is left out.
         With `ortho_extent` > 0 the projection is orthographic along the pole (a sun)."""
         ctx = self.ctx
         uniforms = {"near": 0.0, "far": 2.0 * self.scene_diameter, "ortho_extent": float(ortho_extent),
