@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from . import core
-from .core import KERNELS, MAX_LIGHTMAP_SIZE, METHODS, SHOOTING_POINTS, SOLVERS, TEXEL_DENSITY, VISIBILITY_VARIANTS
+from .core import CONTENTS, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, SHOOTING_POINTS, SOLVERS, TEXEL_DENSITY, VISIBILITY_VARIANTS
 from .core import LightmapSettings, SolveError, SolveSettings
 
 
@@ -123,7 +123,8 @@ def write_lightmaps_and_preview(args, scene, solution, gpu) -> None:
     import numpy as np
 
     lightmaps = core.bake_lightmaps(scene, solution, LightmapSettings(texel_density=args.texel_density,
-                                                                      max_size=args.max_lightmap_size), gpu=gpu)
+                                                                      max_size=args.max_lightmap_size,
+                                                                      content=args.content), gpu=gpu)
     if args.lightmaps:
         directory = Path(args.lightmaps)
         directory.mkdir(parents=True, exist_ok=True)
@@ -181,7 +182,7 @@ def command_bake(args) -> int:
     from .blender.headless import HeadlessBake, bake_file
 
     progress = print_progress(args.quiet)
-    lightmap_options = {field: getattr(args, field) for field in ("texel_density", "max_size")
+    lightmap_options = {field: getattr(args, field) for field in ("texel_density", "max_size", "content")
                         if getattr(args, field, None) is not None}
     request = HeadlessBake(file=args.file, solve_options=given_solver_options(args), lightmap_options=lightmap_options,
                            objects=args.objects, output_dir=args.output_dir, save_as=args.save_as,
@@ -220,6 +221,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help=f"lightmap texels per scene unit (default {TEXEL_DENSITY:g})")
     images.add_argument("--max-lightmap-size", type=int, default=MAX_LIGHTMAP_SIZE, metavar="N",
                         help=f"cap on a lightmap's width and height (default {MAX_LIGHTMAP_SIZE})")
+    images.add_argument("--content", choices=CONTENTS, default=LightmapSettings().content,
+                        help="what the lightmaps hold: the light arriving (default; B = E + rho x light) or the"
+                             " outgoing radiance B")
     images.add_argument("--preview", metavar="OUT.png",
                         help="render the scene with its lightmaps from its camera into a PNG")
     images.add_argument("--preview-size", type=int, default=512, metavar="N",
@@ -241,6 +245,10 @@ def build_parser() -> argparse.ArgumentParser:
                                   " (default 256)")
     bake_parser.add_argument("--texel-density", type=float, metavar="D",
                              help=f"lightmap texels per metre (default: the file's setting, {TEXEL_DENSITY:g} in a new file)")
+    bake_parser.add_argument("--content", choices=CONTENTS,
+                             help="what the lightmaps hold: the light arriving, shown as emission + Base Color x"
+                                  " lightmap (the default of a new file), or combined: the outgoing radiance"
+                                  " (default: the file's setting)")
     bake_parser.add_argument("--report", metavar="REPORT.json", help="write the solve's timings/effects report")
     bake_parser.add_argument("--max-lightmap-size", dest="max_size", type=int, metavar="PX",
                              help=f"largest lightmap side (default: the file's setting, {MAX_LIGHTMAP_SIZE} in a new file)")

@@ -33,12 +33,13 @@ ALLOWED = {
     "scene": {"errors", "settings"},
     "visibility": BASE | {"gpu", "scene"},
     "shooting": BASE | {"gpu", "imaging", "scene", "visibility"},
+    "uvspace": BASE | {"gpu", "scene"},
     "hemicube": BASE | {"gpu", "scene", "visibility", "shooting"},
     "progressive": BASE | {"gpu", "scene", "visibility", "shooting"},
     "report": BASE | {"scene", "hemicube", "progressive"},
     "solution": BASE | {"scene", "report"},
-    "solve": BASE | {"gpu", "scene", "shooting", "hemicube", "progressive", "report", "solution"},
-    "lightmap": BASE | {"gpu", "imaging", "scene", "solution"},
+    "solve": BASE | {"gpu", "scene", "shooting", "uvspace", "hemicube", "progressive", "report", "solution"},
+    "lightmap": BASE | {"gpu", "imaging", "scene", "uvspace", "solution"},
     "preview": BASE | {"gpu", "scene", "lightmap"},
 }
 

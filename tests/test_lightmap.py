@@ -25,8 +25,8 @@ FINE_DENSITY = 256.0  # the demo's density: the smallest Cornell faces (block si
 
 
 def bake_lightmaps(scene, solution, texel_density=CORNELL_DENSITY, gpu=None, objects=None, **settings):
-    """core.bake_lightmaps with this file's defaults (128 texels per metre, up to 2048 texels)."""
-    settings = {"max_size": 2048, **settings}
+    """core.bake_lightmaps with this file's defaults (128 texels per metre, up to 2048 texels, B)."""
+    settings = {"max_size": 2048, "content": "combined", **settings}  # these tests follow B
     return core.bake_lightmaps(scene, solution, LightmapSettings(texel_density=texel_density, **settings), gpu=gpu,
                                objects=objects)
 

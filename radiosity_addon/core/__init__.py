@@ -17,6 +17,10 @@ save_scene(scene, path)                                  writes the scene file b
 check_has_emitter(scene)                                 SceneError when nothing emits.
 polygon_faults(corners, corner_count) -> masks           the polygon checks every scene passes
                                                          (zero area, not planar, not convex).
+surfaces_with_material_maps(gpu, scene, {object: MaterialMap}) -> Scene
+                       attaches per-texel albedo and emission (float32 (H, W, 3) each, in the
+                       object's lightmap UVs at its lightmap's size) and gives every surface the
+                       mean of its texels; a solve then gives every patch the mean of its own.
 Scene                  arrays of surfaces (`corners`, `reflectance`, `emission`, `uv`, objects)
                        plus `extras` (lights, world, camera); `scene.surface(i)` is one of them.
 
@@ -50,11 +54,16 @@ Lightmaps and preview
 ---------------------
 bake_lightmaps(scene, solution, settings=None, gpu=None, objects=None) -> {object name: Lightmap}
     settings       LightmapSettings: texel_density (texels per scene unit), max_size,
-                   resolution_overrides {object: side or (w, h)}, power_of_two, gutter.
+                   resolution_overrides {object: side or (w, h)}, power_of_two, gutter, and
+                   content: "light" (default) — the light H arriving, B = E + ρH, shown as
+                   emission + albedo x lightmap — or "combined", B itself (per texel from the
+                   material map where an object has one).
     objects        names of the objects that get a lightmap (default: all; others only
                    block and reflect light).
 Lightmap               levels (RGBA float32 mip chain, alpha = coverage), filled_image() (for
                        renderers that build their own mipmaps), surfaces and their surface_uv.
+lightmap_sizes(scene, settings=None, objects=None) -> {object: (width, height)}
+                       the sizes bake_lightmaps will use (e.g. to bake material maps first).
 render_preview(scene, lightmaps, camera=None, width=512, height=512, supersample=2, gpu=None)
     -> Preview         the scene from `camera` (default: the scene's own, else one that frames
                        it), lit only by the lightmaps, trilinearly filtered.
@@ -80,23 +89,24 @@ from .errors import USER_ERRORS, GLUnavailable, SceneError, SolveCancelled, Solv
 from .gpu import GPU, open_gpu
 from .hemicube import form_factor_matrix, point_to_polygon, solve_linear
 from .hemicube.linear_solvers import Convergence
-from .lightmap import Lightmap, bake_lightmaps
+from .lightmap import Lightmap, bake_lightmaps, lightmap_sizes
 from .preview import Camera, Preview, render_preview, save_preview
 from .report import Report
 from .scene.geometry import bilinear
-from .scene import (Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
+from .scene import (MaterialMap, Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
                     save_scene, scene_from_dict, subdivide)
-from .settings import (DEFAULT_TOLERANCE, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, PATCH_SIZE, SHOOTING_POINTS, SOLVERS,
+from .settings import (CONTENTS, DEFAULT_TOLERANCE, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, PATCH_SIZE, SHOOTING_POINTS, SOLVERS,
                        TEXEL_DENSITY, VISIBILITY_VARIANTS, LightmapSettings, SolveSettings)
 from .solution import Solution
 from .solve import solve
+from .uvspace import surfaces_with_material_maps
 
 __all__ = [
-    "Camera", "Convergence", "DEFAULT_TOLERANCE", "GLUnavailable", "GPU", "KERNELS", "Lightmap", "LightmapSettings",
+    "CONTENTS", "Camera", "Convergence", "DEFAULT_TOLERANCE", "GLUnavailable", "GPU", "KERNELS", "Lightmap", "LightmapSettings", "MaterialMap",
     "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
     "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "Surface", "TEXEL_DENSITY",
     "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",
-    "form_factor_matrix", "polygon_faults",
+    "form_factor_matrix", "lightmap_sizes", "polygon_faults",
     "load_scene", "open_gpu", "point_to_polygon", "render_preview", "save_preview", "save_scene",
-    "scene_from_dict", "solve", "solve_linear", "subdivide",
+    "scene_from_dict", "solve", "solve_linear", "subdivide", "surfaces_with_material_maps",
 ]

@@ -21,6 +21,7 @@ TEXEL_DENSITY = 64.0  # lightmap texels per scene unit (metre): 15.6 mm texels
 MAX_LIGHTMAP_SIZE = 1024  # texels, the largest side of a lightmap
 LIGHTMAP_GUTTER = 2  # texels dilated around every chart, at every mip level
 MIN_LIGHTMAP_SIZE = 8
+CONTENTS = ("light", "combined")  # what a lightmap holds: the light H arriving (B = E + ρH), or B itself
 
 
 @dataclass
@@ -77,9 +78,12 @@ class LightmapSettings:
     resolution_overrides: dict = field(default_factory=dict)  # object name -> side (or (w, h)); 0 = density
     power_of_two: bool = False  # round sizes up to powers of two
     gutter: int = LIGHTMAP_GUTTER
+    content: str = "light"  # "light": H, shown as emission + albedo x lightmap; "combined": B = E + ρH
 
     def validate(self) -> None:
         if not (math.isfinite(self.texel_density) and self.texel_density > 0):
             raise SolveError(f"texel density must be positive, got {self.texel_density}")
+        if self.content not in CONTENTS:
+            raise SolveError(f"unknown lightmap content '{self.content}' (choose {', '.join(CONTENTS)})")
         if self.max_size < MIN_LIGHTMAP_SIZE:
             raise SolveError(f"the lightmap size cap must be at least {MIN_LIGHTMAP_SIZE}, got {self.max_size}")

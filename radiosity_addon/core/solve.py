@@ -19,6 +19,7 @@ from .settings import SolveSettings
 from .shooting import element_areas
 from .solution import Solution
 from .timing import ProgressCallback, StageTimer
+from .uvspace import patch_material_values
 
 
 def solve(scene: Scene, settings: SolveSettings | None = None, progress: ProgressCallback | None = None,
@@ -34,6 +35,9 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
     with timer.stage("subdivide"):
         patches = subdivide(scene, settings.subdiv, settings.patch_size, backs)
     with open_gpu(gpu) as solve_gpu:
+        if scene.material_maps:  # textured materials: each patch takes the mean of its texels
+            with timer.stage("materials"):
+                patches.reflectance, patches.emission = patch_material_values(solve_gpu, scene, patches)
         if settings.method == "hemicube":
             radiosity, light, details, _ = solve_hemicube(solve_gpu, scene, patches, settings, effects, timer,
                                                           progress, should_cancel)

@@ -1,7 +1,7 @@
 """Lightmaps: per-object images in UV space from a solution — charts, lattices, rasterizing,
 gutters and mips."""
 
-from .bake import Lightmap, bake_lightmaps
+from .bake import Lightmap, bake_lightmaps, lightmap_sizes
 from .mips import filled_image, gl_mip_count, mip_levels
 
-__all__ = ["Lightmap", "bake_lightmaps", "filled_image", "gl_mip_count", "mip_levels"]
+__all__ = ["Lightmap", "bake_lightmaps", "lightmap_sizes", "filled_image", "gl_mip_count", "mip_levels"]

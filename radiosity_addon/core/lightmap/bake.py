@@ -5,7 +5,8 @@ Per object (docs/architecture.md, Lightmaps):
 2. UVs: the scene's `uv` (the Blender exporter's `Lightmap` map) or, when an object has
    none, an automatic layout (`charts`).
 3. Values: patch lattices continuous across patch borders, chart borders and smooth edges
-   (`lattice`).
+   (`lattice`), of the light H (content "light") or the radiosity B (content "combined"; an
+   object with a material map gets B = E + ρH per texel from its texels' albedo and emission).
 4. The GPU rasterizes every patch's footprint into the atlas (`rasterize`).
 5. Gutters are dilated from the inside and the mip chain is coverage-aware (`mips`).
 
@@ -26,10 +27,10 @@ from ..gpu import GPU, open_gpu
 from ..scene import Scene
 from ..settings import LightmapSettings
 from ..solution import Solution
+from ..uvspace import rasterize
 from . import charts
 from .lattice import continuous_lattice, element_values
 from .mips import filled_image, mip_levels
-from .rasterize import rasterize
 from .size import resolve_size
 
 UV_TOLERANCE = 1e-3  # how far given UVs may stray outside [0, 1]
@@ -44,6 +45,7 @@ class Lightmap:
     surfaces: np.ndarray  # (n,) indices of the object's surfaces
     surface_uv: np.ndarray  # (n, 4, 2) corner UVs the map was baked with (triangles repeat c2)
     texel_density: float  # achieved texels per scene unit: sqrt(texels inside faces / face area)
+    content: str = "light"  # "light": H (shown as E + ρ H), "combined": B
 
     @property
     def rgba(self) -> np.ndarray:
@@ -84,11 +86,19 @@ def _given_uvs(scene: Scene, name: str, indices: np.ndarray) -> bool:
     return True
 
 
-def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings | None = None,
-                   gpu: GPU | None = None, objects=None) -> dict[str, Lightmap]:
-    """One `Lightmap` per object of `scene` (or of `objects`, names of some of them: objects
-    that only occlude need none), keyed by object name (see core/__init__.py)."""
-    settings = settings or LightmapSettings()
+@dataclass
+class Layouts:
+    """Where every baked object's lightmap goes: its size, and its surfaces' UVs."""
+    objects: dict  # object name -> surface indices
+    sizes: dict  # object name -> (width, height)
+    object_of_surface: np.ndarray  # (S,) index into `objects`, -1 for surfaces not baked
+    surface_uv: np.ndarray  # (S, 4, 2) the given UVs, and the automatic ones made here
+    laid_out: np.ndarray  # (S,) bool: surfaces given automatic UVs here
+    uv_maps: np.ndarray  # (S, 2, 4) their affine maps: uv = M @ [x, y, z, 1]
+
+
+def plan_layouts(scene: Scene, settings: LightmapSettings, objects=None) -> Layouts:
+    """Sizes and UVs of the lightmaps of `objects` (default: all), before any value is known."""
     settings.validate()
     all_objects = scene.object_surfaces
     overrides = {name: size for name, size in settings.resolution_overrides.items() if size}
@@ -97,25 +107,18 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
         raise SolveError(f"no object '{unknown[0]}' in the scene to bake a lightmap for")
     chosen = set(all_objects if objects is None else objects)
     objects = {name: indices for name, indices in all_objects.items() if name in chosen}
-    patches = solution.patches
-    values = element_values(solution)
-    if len(values) != len(patches):
-        raise SolveError("the solution does not belong to this scene (patch counts differ)")
     scene_size = max(scene.diameter, 1e-30)
     pad = settings.gutter + 1  # a chart's grazed texels, then its gutter
-
-    layouts = {}
-    object_of_surface = np.full(len(scene), -1, dtype=np.int64)  # -1: not baked
-    surface_uv = scene.uv.copy()  # the given UVs, and the automatic ones made here
-    laid_out = np.zeros(len(scene), dtype=bool)  # surfaces given automatic UVs here
-    uv_maps = np.zeros((len(scene), 2, 4))  # their affine maps: uv = M @ [x, y, z, 1]
+    layouts = Layouts(objects=objects, sizes={}, object_of_surface=np.full(len(scene), -1, dtype=np.int64),
+                      surface_uv=scene.uv.copy(), laid_out=np.zeros(len(scene), dtype=bool),
+                      uv_maps=np.zeros((len(scene), 2, 4)))
     for number, (name, indices) in enumerate(objects.items()):
-        object_of_surface[indices] = number
+        layouts.object_of_surface[indices] = number
         override = overrides.get(name)
         if _given_uvs(scene, name, indices):
             side = settings.texel_density * math.sqrt(scene.area[indices].sum() / uv_polygon_area(scene.uv[indices]).sum())
-            layouts[name] = resolve_size((math.ceil(side),) * 2, override, settings.max_size, settings.power_of_two,
-                                         name)
+            layouts.sizes[name] = resolve_size((math.ceil(side),) * 2, override, settings.max_size,
+                                               settings.power_of_two, name)
             continue
         surfaces = {int(i): scene.surface(i) for i in indices}
         object_charts = charts.make_charts(surfaces, list(surfaces), scene_size)
@@ -123,30 +126,59 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
         size = resolve_size(natural, override, settings.max_size, settings.power_of_two, name)
         scale = charts.largest_fitting_scale(object_charts, size, pad, name)
         layout = charts.place_charts(object_charts, size, scale, pad)
-        laid_out[indices] = True
-        uv_maps[indices] = [layout.uv_maps[int(i)] for i in indices]
-        surface_uv[indices] = np.einsum("sij,skj->ski", uv_maps[indices, :, :3], scene.corners[indices]) \
-            + uv_maps[indices, None, :, 3]
-        layouts[name] = size
+        layouts.laid_out[indices] = True
+        layouts.uv_maps[indices] = [layout.uv_maps[int(i)] for i in indices]
+        layouts.surface_uv[indices] = np.einsum("sij,skj->ski", layouts.uv_maps[indices, :, :3],
+                                                scene.corners[indices]) + layouts.uv_maps[indices, None, :, 3]
+        layouts.sizes[name] = size
+    return layouts
+
+
+def lightmap_sizes(scene: Scene, settings: LightmapSettings | None = None, objects=None) -> dict:
+    """{object: (width, height)} of the lightmaps `bake_lightmaps` would make."""
+    return plan_layouts(scene, settings or LightmapSettings(), objects).sizes
+
+
+def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings | None = None,
+                   gpu: GPU | None = None, objects=None) -> dict[str, Lightmap]:
+    """One `Lightmap` per object of `scene` (or of `objects`, names of some of them: objects
+    that only occlude need none), keyed by object name (see core/__init__.py)."""
+    settings = settings or LightmapSettings()
+    layouts = plan_layouts(scene, settings, objects)
+    objects, object_of_surface, surface_uv = layouts.objects, layouts.object_of_surface, layouts.surface_uv
+    patches = solution.patches
+    light = settings.content == "light"
+    radiosity = element_values(solution)
+    mapped = np.isin(patches.surface, [i for name in scene.material_maps for i in scene.object_surfaces.get(name, ())])
+    # H for "light", and for "combined" where a material map turns H into B texel by texel; else B
+    values = element_values(solution, light=True) if light or mapped.any() else radiosity
+    if len(values) != len(patches):
+        raise SolveError("the solution does not belong to this scene (patch counts differ)")
+    scene_size = max(scene.diameter, 1e-30)
 
     # patch corner UVs: the given ones were subdivided with the patches; automatic ones are affine in position
     patch_uv = np.array(patches.uv, dtype=np.float64)
-    auto = laid_out[patches.surface]
-    maps = uv_maps[patches.surface[auto]]
+    auto = layouts.laid_out[patches.surface]
+    maps = layouts.uv_maps[patches.surface[auto]]
     patch_uv[auto] = np.einsum("pij,pkj->pki", maps[..., :3], patches.corners[auto]) + maps[:, None, :, 3]
 
     group = np.where(patches.is_back, -1, object_of_surface[patches.surface])  # a lightmap holds the front
     baked = np.flatnonzero(group >= 0)
+    if not light and mapped.any():
+        values = np.where(mapped[:, None, None, None], values, radiosity)
     lattice = np.zeros((len(patches),) + (values.shape[1] + 2,) * 2 + (3,))
     lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
                                         patches.normal[baked], world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
     lightmaps = {}
     with open_gpu(gpu) as lightmap_gpu:
         for name, indices in objects.items():
-            size = layouts[name]
+            size = layouts.sizes[name]
             mine = np.flatnonzero(np.isin(patches.surface, indices) & ~patches.is_back)
             corners_texels = patch_uv[mine] * np.asarray(size, dtype=np.float64)
             texel_values, signed_ids = rasterize(lightmap_gpu, corners_texels, lattice[mine], size)
+            material = scene.material_maps.get(name)
+            if not light and material is not None:
+                texel_values = combined_texels(texel_values, material, size, name)
             covered = signed_ids != 0
             inside = signed_ids > 0
             patch_index = np.where(inside, mine[np.maximum(signed_ids, 1) - 1], -1).astype(np.int32)
@@ -156,6 +188,15 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
             levels, coverage = mip_levels(texel_values.astype(np.float64), covered, settings.gutter)
             lightmaps[name] = Lightmap(object_name=name, levels=levels, coverage=coverage, patch_index=patch_index,
                                        surfaces=indices, surface_uv=surface_uv[indices],
-                                       texel_density=math.sqrt(inside.sum() / scene.area[indices].sum()))
+                                       texel_density=math.sqrt(inside.sum() / scene.area[indices].sum()),
+                                       content=settings.content)
     return lightmaps
+
+
+def combined_texels(light: np.ndarray, material, size: tuple[int, int], name: str) -> np.ndarray:
+    """B = E + ρ H texel by texel, from an object's material map (which has its lightmap's size)."""
+    if material.albedo.shape[:2] != (size[1], size[0]):
+        raise SolveError(f"object '{name}': its material map is {material.albedo.shape[1]}x{material.albedo.shape[0]}"
+                         f" texels, its lightmap {size[0]}x{size[1]}")
+    return material.emission + material.albedo * light
 

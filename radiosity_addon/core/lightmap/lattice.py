@@ -12,18 +12,23 @@ import math
 import numpy as np
 
 from ..scene.geometry import bilinear
+from ..errors import SolveError
 from ..solution import Solution
 
 SMOOTH_EDGE_DEGREES = 30.0  # faces meeting flatter than this share values at their edge (Blender's auto smooth)
 
 
-def element_values(solution: Solution) -> np.ndarray:
-    """(P, S, S, 3) radiosity: the elements, or the patch values as S = 1 (a grey one-channel
-    result is repeated into three)."""
-    if solution.element_radiosity is not None:
-        values = np.asarray(solution.element_radiosity, dtype=np.float64)
+def element_values(solution: Solution, light: bool = False) -> np.ndarray:
+    """(P, S, S, 3) radiosity B (or with `light` the light H, B = E + ρH): the elements, or the patch
+    values as S = 1 (a grey one-channel result is repeated into three)."""
+    elements, patches = ((solution.element_light, solution.patch_light) if light
+                         else (solution.element_radiosity, solution.patch_radiosity))
+    if patches is None:
+        raise SolveError("the solution holds no light values (made by hand?); bake its lightmaps as 'combined'")
+    if elements is not None:
+        values = np.asarray(elements, dtype=np.float64)
     else:
-        values = np.asarray(solution.patch_radiosity, dtype=np.float64)[:, None, None, :]
+        values = np.asarray(patches, dtype=np.float64)[:, None, None, :]
     return np.broadcast_to(values, values.shape[:3] + (3,)) if values.shape[3] == 1 else values
 
 

@@ -2,7 +2,8 @@
 
 Each object's lightmap (with its coverage-aware mip chain) is uploaded as a
 float texture sampled with LINEAR_MIPMAP_LINEAR, clamped at the edges, and
-the surfaces are drawn with back faces culled (only fronts emit and receive).
+the surfaces are drawn with back faces culled (a lightmap holds the front). A
+"light" lightmap (H) is shown as E + ρ H with each surface's own values.
 The picture is rendered `supersample` times larger and box-filtered down.
 
 Exposure (the PNG, see `png` for the tone map): without an explicit exposure, it
@@ -18,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..gpu import GPU, Resources, open_gpu, texture_unit
+from ..gpu import GPU, Resources, open_gpu, storage, texture_unit
 from ..lightmap import gl_mip_count
 from ..scene import Scene
 from .camera import Camera, default_camera
@@ -85,7 +86,11 @@ def render_preview(scene: Scene, lightmaps: dict, camera: Camera | None = None, 
         ctx.enable_only(ctx.DEPTH_TEST | ctx.CULL_FACE)  # only fronts emit and receive
         ctx.front_face = "ccw"
         ctx.depth_func = "<"
+        rgba = lambda values: np.concatenate([values, np.zeros((len(values), 1))], axis=1).astype("f4")  # noqa: E731
+        res.buffer(rgba(scene.reflectance).tobytes()).bind_to_storage_buffer(storage("SURFACE_REFLECTANCE"))
+        res.buffer(rgba(scene.emission).tobytes()).bind_to_storage_buffer(storage("SURFACE_EMISSION"))
         for lightmap in lightmaps.values():
+            program["shows_light"] = int(lightmap.content == "light")
             with preview_gpu.resources() as scoped:  # one object's texture and geometry at a time
                 texture = _lightmap_texture(scoped, lightmap)
                 vbo = scoped.buffer(_surface_triangles(scene, lightmap).tobytes())

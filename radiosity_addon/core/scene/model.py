@@ -45,6 +45,15 @@ class Surface:
         return float(np.linalg.norm(geometry.polygon_area_vector(self.vertices)))
 
 
+@dataclass(frozen=True)
+class MaterialMap:
+    """An object's diffuse albedo and emission per texel of its lightmap UVs, as the renderer
+    evaluates its materials (the Blender side bakes them with Cycles): float32 (H, W, 3) each,
+    row 0 at v = 0, the layout of its lightmap."""
+    albedo: np.ndarray
+    emission: np.ndarray
+
+
 def padded_corners(vertices) -> np.ndarray:
     """(4, 3) corners of a 3- or 4-vertex polygon (a triangle repeats its last vertex)."""
     v = np.asarray(vertices, dtype=np.float64)
@@ -64,6 +73,7 @@ class Scene:
     has_uv: np.ndarray  # (S,) bool
     two_sided: np.ndarray  # (S,) bool: the back emits and receives too
     extras: dict = field(default_factory=dict)  # other top-level keys (lights, world, camera), kept on save
+    material_maps: dict = field(default_factory=dict)  # object name -> MaterialMap (textured materials)
 
     @classmethod
     def from_surfaces(cls, surfaces: list[Surface], extras: dict | None = None) -> "Scene":

@@ -13,6 +13,7 @@ from .geometry import area_vector
 PLANARITY_TOLERANCE = 1e-4  # off-plane distance, relative to the polygon's size
 MIN_AREA_FRACTION = 1e-10  # area, relative to the squared size
 STRAIGHT_CORNER = 1e-12  # turn at a corner, relative to the squared size
+MAX_REFLECTANCE = 0.99  # the solve needs ρ < 1 (light must lose energy at each bounce); white 1.0 is common
 
 
 def vector(value, length: int, what: str, where: str) -> np.ndarray:

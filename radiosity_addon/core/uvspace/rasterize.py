@@ -1,6 +1,7 @@
-"""The GPU pass that lays patch lattices into a lightmap (lightmap_texel_radiosity.frag): texel
-centres inside a patch's UV footprint get its interpolated value; a texel footprints only
-graze takes the value of the nearest footprint at its nearest point."""
+"""The GPU pass that lays patch lattices into UV space (lightmap_texel_radiosity.frag): texel
+centres inside a patch's UV footprint get its interpolated value and its id; a texel footprints
+only graze takes the value of the nearest footprint at its nearest point. Lightmaps are made
+this way, and material maps are read back per patch through the same ids."""
 
 from __future__ import annotations
 
@@ -47,3 +48,19 @@ def rasterize(gpu: GPU, corners_texels: np.ndarray, lattice: np.ndarray, size: t
         values = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=0), dtype=np.float32)
         ids = np.frombuffer(fbo.read(components=1, dtype="i4", attachment=1), dtype=np.int32)
     return values.reshape(height, width, 4)[..., :3], ids.reshape(height, width)
+
+
+def footprint_means(gpu: GPU, corners_uv: np.ndarray, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Means of `image` (H, W, C) over the texels whose centres lie inside each UV footprint
+    (corners_uv (n, 4, 2), triangles repeating their last corner): (n, C) means and (n,) texel
+    counts (0: the footprint holds no texel centre; its mean is then 0)."""
+    height, width = image.shape[:2]
+    size = np.array([width, height], dtype=np.float64)
+    count = len(corners_uv)
+    _, signed_ids = rasterize(gpu, corners_uv * size, np.zeros((count, 3, 3, 3)), (width, height))
+    inside = signed_ids > 0
+    owner = signed_ids[inside] - 1
+    texels = np.bincount(owner, minlength=count).astype(np.float64)
+    values = image[inside].astype(np.float64)
+    sums = np.stack([np.bincount(owner, values[:, c], minlength=count) for c in range(values.shape[1])], axis=1)
+    return sums / np.maximum(texels, 1)[:, None], texels
