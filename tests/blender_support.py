@@ -29,11 +29,13 @@ def ensure_addon() -> None:
         blender.register()
 
 
-def open_blend(path: Path, method: str = "hemicube", subdivision: int = 2):
-    """Open a file and choose quick solver settings; returns bpy.context."""
+def open_blend(path: Path, method: str = "hemicube", subdivision: int = 2, content: str = "combined"):
+    """Open a file and choose quick solver settings (and what the lightmaps hold: these tests read
+    B off them unless they ask for the light); returns bpy.context."""
     ensure_addon()
     bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
     settings = bpy.context.scene.radiosity
+    settings.content = content
     settings.method = method
     settings.patch_mode = "SUBDIVISION"
     settings.subdivision = subdivision
@@ -101,8 +103,21 @@ def image_rgba(image) -> np.ndarray:
     return pixels.reshape(height, width, 4)
 
 
+def upstream(socket):
+    """Every node feeding `socket`, depth first."""
+    seen, stack = [], [link.from_node for link in socket.links]
+    while stack:
+        node = stack.pop()
+        if node not in seen:
+            seen.append(node)
+            stack += [link.from_node for socket in node.inputs for link in socket.links]
+    return seen
+
+
 def lightmap_wiring(material) -> dict | None:
-    """What the active Material Output shows: None unless it is the add-on's lightmap chain."""
+    """What the active Material Output shows: None unless it is the add-on's lightmap chain (an
+    Emission shader fed by the lightmap image on the Lightmap UV map, through arithmetic for a
+    "light" lightmap)."""
     tree = material.node_tree
     output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.is_active_output), None)
     if output is None or not output.inputs["Surface"].is_linked:
@@ -110,8 +125,9 @@ def lightmap_wiring(material) -> dict | None:
     emission = output.inputs["Surface"].links[0].from_node
     if emission.bl_idname != "ShaderNodeEmission" or not emission.inputs["Color"].is_linked:
         return None
-    texture = emission.inputs["Color"].links[0].from_node
-    if texture.bl_idname != "ShaderNodeTexImage" or not texture.inputs["Vector"].is_linked:
+    texture = next((n for n in upstream(emission.inputs["Color"]) if n.bl_idname == "ShaderNodeTexImage"
+                    and n.get("radiosity_baker")), None)
+    if texture is None or not texture.inputs["Vector"].is_linked:
         return None
     uv = texture.inputs["Vector"].links[0].from_node
     if uv.bl_idname != "ShaderNodeUVMap":

@@ -29,8 +29,12 @@ for obj in (o for o in bpy.data.objects if o.type == "MESH"):
         tree = slot.material.node_tree
         output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.is_active_output)
         emission = output.inputs["Surface"].links[0].from_node
-        texture = emission.inputs["Color"].links[0].from_node
-        assert texture.image == image, (obj.name, texture.image)
+        stack, shown_images = [emission], []
+        while stack:  # the lightmap image upstream of the emission (through a light lightmap's arithmetic)
+            node = stack.pop()
+            shown_images += [node.image] if node.bl_idname == "ShaderNodeTexImage" and node.get("radiosity_baker") else []
+            stack += [link.from_node for socket in node.inputs for link in socket.links]
+        assert shown_images == [image], (obj.name, shown_images)
     shown[obj.name] = (image.filepath, float(pixels.reshape(-1, 4)[:, :3].max()))
 print("SHOWN", shown)
 """

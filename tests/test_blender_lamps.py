@@ -19,7 +19,7 @@ from mathutils import Vector
 from radiosity_addon.bench.blend_scenes import box, diffuse_material, mesh_object, reset
 from radiosity_addon.bench.cycles import bake_object
 from radiosity_addon.blender.errors import BakeError
-from radiosity_addon.blender.export import export_scene
+from radiosity_addon.blender.export import check_emitters, export_scene
 from radiosity_addon.blender.lights import export_lights, render_lamps
 from radiosity_addon.blender.lightmap_uv import add_lightmap_uvs
 from radiosity_addon.blender.tags import CREATED_UV
@@ -39,6 +39,7 @@ def build_scene():
     for obj in (floor, box_object):
         obj.radiosity.lightmap_resolution = 32
     settings = bpy.context.scene.radiosity
+    settings.content = "combined"  # compared with Cycles' Combined bake
     settings.method = "progressive"
     settings.patch_mode = "SIZE"
     settings.patch_size = 0.5
@@ -193,7 +194,8 @@ def test_lamp_or_world_alone_lights_the_exported_scene_and_nothing_is_refused():
     add_lightmap_uvs(bpy.context, objects, 0.1)
     context = bpy.context
     with pytest.raises(BakeError, match="nothing emits light"):
-        export_scene(context.evaluated_depsgraph_get(), objects, [], lamps=[], world=context.scene.world)
+        check_emitters(export_scene(context.evaluated_depsgraph_get(), objects, [], lamps=[],
+                                    world=context.scene.world).scene)
     set_world((0.2, 0.3, 0.5), 1.0)
     scene = export_scene(context.evaluated_depsgraph_get(), objects, [], world=context.scene.world).scene
     assert "world" in scene.extras and "world" in scene.to_dict() and "lights" not in scene.extras

@@ -14,12 +14,11 @@ Only this module of the benchmark imports bpy; it calls `bake_scene` and gets nu
 
 from __future__ import annotations
 
-import contextlib
-import os
-import sys
 import time
 
 import numpy as np
+
+from ..blender.material_bake import quiet_stdout
 
 QUAD_UV = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
 TRIANGLE_UV = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
@@ -112,20 +111,6 @@ def _configure_cycles(bpy, samples: int, seed: int, threads: int | None):
     bake.use_pass_direct = bake.use_pass_indirect = True
     bake.use_pass_emit = bake.use_pass_diffuse = True
     bake.margin = 0
-
-
-@contextlib.contextmanager
-def quiet_stdout():
-    """Blender prints one "Info: Baking map saved ..." line per image to the C stdout: silence it."""
-    sys.stdout.flush()
-    saved = os.dup(1)
-    try:
-        with open(os.devnull, "w") as devnull:
-            os.dup2(devnull.fileno(), 1)
-            yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
 
 
 def bake_scene(scene, resolution: int, samples: int, seed: int = 0, threads: int | None = None) -> dict:

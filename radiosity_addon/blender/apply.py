@@ -19,8 +19,10 @@ import bpy
 import numpy as np
 
 from .errors import BakeError
+from .materials import MaterialReader
+from .shader_graph import Nodes, surface_shader, walk
 from .tags import (ADDED_SLOT, COPY_OF, CREATED_UV, ENABLED_NODES, LIGHTMAP_UV, NODE_TAG, ORIGINAL_OUTPUT,
-                   ORIGINAL_SLOTS, is_ours, lightmap_image_name, uses_nodes)
+                   ORIGINAL_SLOTS, is_ours, lightmap_image_name, original_output_node, uses_nodes)
 
 PENDING_SUFFIX = ".radiosity-pending"
 NODE_NAMES = {
@@ -150,8 +152,25 @@ def _tagged(tree, role: str, kind: str, location):
     return node
 
 
-def wire_material(material, image) -> None:
-    """Show `image` (on the Lightmap UV map, linear filtering) as the material's surface."""
+def _shown_colour(material, tree, texture, make, content: str, diffuse_factors: dict, reader):
+    """The socket or constant the baked material emits: the lightmap itself ("combined"), or its
+    emission + albedo x lightmap ("light"), albedo and emission from the material's own nodes."""
+    lightmap = texture.outputs["Color"]
+    if content == "combined":
+        return lightmap
+    fallback = reader.colours(material)
+    algebra = Nodes(tree, make, diffuse_factors.get(material.name, {}), fallback)
+    shader = None
+    if uses_nodes(material) and not material.get(ENABLED_NODES):  # a 4.x material without nodes: its colour
+        shader = surface_shader(original_output_node(material))
+    albedo, emission = walk(shader, algebra) if shader is not None else fallback
+    return algebra.add(emission, algebra.scale(lightmap, albedo))
+
+
+def wire_material(material, image, content: str = "combined", diffuse_factors: dict | None = None,
+                  reader: MaterialReader | None = None) -> None:
+    """Show `image` (on the Lightmap UV map, linear filtering) as the material's surface: as the
+    outgoing radiance it holds ("combined"), or as the light arriving ("light"), lit by it."""
     if not uses_nodes(material):  # Blender 4.x material shown without nodes: remember to switch back
         material[ENABLED_NODES] = True
         material.use_nodes = True
@@ -160,6 +179,8 @@ def wire_material(material, image) -> None:
         active = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"
                        and n.is_active_output and not is_ours(n)), None)
         material[ORIGINAL_OUTPUT] = active.name if active else ""
+    for node in [n for n in tree.nodes if is_ours(n) and n.name not in NODE_NAMES.values()]:
+        tree.nodes.remove(node)  # the arithmetic of an earlier bake
     right = max((n.location.x for n in tree.nodes if not is_ours(n)), default=0.0)
     x, y = right + 300.0, 600.0
     uv = _tagged(tree, "uv", "ShaderNodeUVMap", (x, y))
@@ -168,20 +189,34 @@ def wire_material(material, image) -> None:
     texture.image = image
     texture.interpolation = "Linear"
     texture.extension = "EXTEND"
-    emission = _tagged(tree, "emission", "ShaderNodeEmission", (x + 500, y))
+    made = []
+
+    def make(kind):
+        node = tree.nodes.new(kind)
+        node[NODE_TAG] = 1
+        node.location = (x + 300 + 60 * len(made), y - 300 - 40 * len(made))
+        made.append(node)
+        return node
+
+    colour = _shown_colour(material, tree, texture, make, content, diffuse_factors or {}, reader or MaterialReader())
+    emission = _tagged(tree, "emission", "ShaderNodeEmission", (x + 500 + 60 * len(made), y))
     emission.inputs["Strength"].default_value = 1.0
-    output = _tagged(tree, "output", "ShaderNodeOutputMaterial", (x + 700, y))
+    output = _tagged(tree, "output", "ShaderNodeOutputMaterial", (x + 700 + 60 * len(made), y))
     output.target = "ALL"
     tree.links.new(uv.outputs["UV"], texture.inputs["Vector"])
-    tree.links.new(texture.outputs["Color"], emission.inputs["Color"])
+    if hasattr(colour, "node"):
+        tree.links.new(colour, emission.inputs["Color"])
+    else:
+        emission.inputs["Color"].default_value = (*np.clip(colour, 0, None), 1.0)
     tree.links.new(emission.outputs["Emission"], output.inputs["Surface"])
     output.is_active_output = True
 
 
-def show_lightmaps(objects, images: dict) -> None:
+def show_lightmaps(objects, images: dict, content: str = "combined", diffuse_factors: dict | None = None) -> None:
+    reader = MaterialReader()
     for obj in objects:
         for material in _own_materials(obj):
-            wire_material(material, images[obj.name])
+            wire_material(material, images[obj.name], content, diffuse_factors, reader)
 
 
 # ---------------------------------------------------------------- the way back

@@ -7,16 +7,19 @@ switches the shading only once the solve has succeeded.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .. import core
 from ..core import USER_ERRORS as CORE_USER_ERRORS
 from ..core import SolveCancelled, SolveError
 from . import apply
 from .errors import BakeError
-from .export import export_scene
+from .export import check_emitters, export_scene
 from .lightmap_uv import add_lightmap_uvs, remove_lightmap_uvs
+from .material_bake import bake_material_maps, principled_diffuse_factors
 from .lights import render_lamps
 from .options import BakeOptions
 from .worker import BakeWorker
@@ -37,6 +40,9 @@ class BakePlan:
     report: dict = field(default_factory=dict)  # the solve's report (its JSON), once finished
     scene: object = None  # the bpy scene baked: its settings record what the bake simulated
     summary: str = ""
+    content: str = "light"  # what the lightmaps hold, and so how the materials show them
+    diffuse_factors: dict = field(default_factory=dict)  # material -> Principled node -> RGB (light content)
+    instances: int = 0  # instanced geometries that took part without a lightmap
 
 
 def choose_objects(context, objects=None) -> list:
@@ -65,22 +71,37 @@ def prepare(context, options: BakeOptions, objects=None, output_dir=None) -> Bak
     directory = Path(output_dir) if output_dir is not None else apply.default_exr_directory()
     apply.check_output(output, directory)
 
-    occluders = []
-    if options.include_unselected:
-        baked_names = {obj.name for obj in baked}
-        occluders = [obj for obj in context.view_layer.objects
-                     if obj.type == "MESH" and obj.name not in baked_names and obj.visible_get()]
     added = add_lightmap_uvs(context, baked, options.uv_margin)
     try:
-        exported = export_scene(context.evaluated_depsgraph_get(), baked, occluders,
+        exported = export_scene(context.evaluated_depsgraph_get(), baked,
+                                occluders=None if options.include_unselected else [],
                                 lamps=render_lamps(context.view_layer), world=context.scene.world)
+        scene, diffuse_factors = baked_materials(context, exported, baked, options)
     except BaseException:
         remove_lightmap_uvs(added)
         raise
-    worker = BakeWorker(exported.scene, options.solve, exported.baked_objects, options.lightmaps)
+    worker = BakeWorker(scene, options.solve, exported.baked_objects, options.lightmaps)
     warnings = list(exported.warnings)
-    return BakePlan(objects=baked, worker=worker, output=output, directory=directory,
-                    added_uv_meshes=added, warnings=warnings, scene=context.scene)
+    if exported.instances:
+        warnings.append(f"{exported.instances} instance(s) block and reflect light but get no lightmap"
+                        " (they share their mesh with others)")
+    return BakePlan(objects=baked, worker=worker, output=output, directory=directory, added_uv_meshes=added,
+                    warnings=warnings, scene=context.scene, content=options.lightmaps.content,
+                    diffuse_factors=diffuse_factors, instances=exported.instances)
+
+
+def baked_materials(context, exported, baked, options: BakeOptions):
+    """The exported scene with its baked objects' material maps (Cycles' own albedo and emission),
+    and the diffuse factors of their Principled BSDFs for a "light" lightmap's baked look."""
+    sizes = core.lightmap_sizes(exported.scene, options.lightmaps, exported.baked_objects)
+    try:
+        maps = bake_material_maps(context, baked, sizes)
+        factors = principled_diffuse_factors(context, baked) if options.lightmaps.content == "light" else {}
+    except RuntimeError as error:  # Cycles refused (a message of its own)
+        raise BakeError(f"Cycles could not bake the materials: {str(error).strip().splitlines()[-1]}") from None
+    scene = dataclasses.replace(exported.scene, material_maps=maps)
+    check_emitters(scene)
+    return scene, factors
 
 
 def rollback(plan: BakePlan) -> None:
@@ -106,7 +127,7 @@ def finish(plan: BakePlan) -> str:
         rollback(plan)
         raise
     try:
-        apply.show_lightmaps(plan.objects, written)
+        apply.show_lightmaps(plan.objects, written, plan.content, plan.diffuse_factors)
     except BaseException:  # a bug: better unbaked and consistent than half wired
         for obj in plan.objects:
             apply.remove_bake(obj)

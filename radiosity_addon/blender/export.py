@@ -4,7 +4,13 @@ Faces become surfaces of 3 or 4 vertices: triangles and planar convex quads as t
 and the quads the core's polygon checks refuse (bent, concave) through Blender's own
 triangulation. Faces of zero area are skipped (a warning counts them). Vertex order follows
 Blender's winding, which is the core's front convention; a mirroring object transform flips it
-back. The core splits the surfaces into patches (by Patch Size or N x N).
+back. Every face is two-sided, as Cycles renders it (the core simulates a back only where it can
+send or receive light). The core splits the surfaces into patches (by Patch Size or N x N).
+
+What Cycles renders takes part in the light transport: besides mesh objects, curves, surfaces,
+text and metaballs (as the meshes they evaluate to) and every instance the depsgraph holds —
+collection instances, geometry-nodes and particle instances, linked duplicates. Objects that own
+their mesh get lightmaps; instances share a mesh, so they only block and reflect light.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ from .tags import LIGHTMAP_UV
 class ExportedScene:
     scene: Scene
     baked_objects: list[str]  # objects that get a lightmap
+    instances: int = 0  # instanced geometries in the light transport (they get no lightmap)
     warnings: list[str] = field(default_factory=list)
 
 
@@ -43,29 +50,37 @@ class MeshFaces:
     emission: np.ndarray  # (F, 3)
 
 
+GEOMETRY_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}  # object types Cycles renders as meshes
+
+
 class MeshExporter:
     def __init__(self):
         self.materials = MaterialReader()
         self.warnings: list[str] = []
         self.meshes: list[tuple[str, bool, MeshFaces]] = []  # (object name, has lightmap UVs, faces)
+        self.instances = 0  # instanced geometries exported (occluders only)
 
-    def add(self, obj, obj_eval, with_lightmap_uv: bool) -> int:
-        """Append the faces of one evaluated object; returns how many surfaces it gave."""
-        mesh = obj_eval.to_mesh()
+    def add(self, obj, obj_eval, with_lightmap_uv: bool, matrix=None, name: str | None = None) -> int:
+        """Append the faces of one evaluated object (at `matrix`, default its own); returns how many
+        surfaces it gave."""
         try:
-            faces = self._faces(obj, obj_eval, mesh, with_lightmap_uv)
+            mesh = obj_eval.to_mesh()
+        except RuntimeError:  # an object type with no mesh to give (an empty curve, ...)
+            return 0
+        try:
+            faces = None if mesh is None else self._faces(obj, obj_eval, mesh, with_lightmap_uv, matrix)
         finally:
             obj_eval.to_mesh_clear()
         if faces is not None:
-            self.meshes.append((obj.name, with_lightmap_uv, faces))
+            self.meshes.append((name or obj.name, with_lightmap_uv, faces))
         return 0 if faces is None else len(faces.corners)
 
-    def _faces(self, obj, obj_eval, mesh, with_lightmap_uv: bool) -> MeshFaces | None:
+    def _faces(self, obj, obj_eval, mesh, with_lightmap_uv: bool, matrix=None) -> MeshFaces | None:
         if len(mesh.polygons) == 0:
             if with_lightmap_uv:
                 raise BakeError(f"object '{obj.name}' has no faces to bake")
             return None
-        matrix = np.array(obj_eval.matrix_world, dtype=np.float64)
+        matrix = np.array(obj_eval.matrix_world if matrix is None else matrix, dtype=np.float64)
         local = _foreach(mesh.vertices, "co", 3, np.float32).astype(np.float64)
         positions = local @ matrix[:3, :3].T + matrix[:3, 3]
         if not np.all(np.isfinite(positions)):
@@ -142,26 +157,55 @@ class MeshExporter:
         return Scene(names=names, corners=stack("corners"), corner_count=stack("corner_count"),
                      reflectance=stack("reflectance"), emission=stack("emission"),
                      object_index=np.concatenate(object_index), object_names=[name for name, _, _ in self.meshes],
-                     uv=stack("uv"), has_uv=has_uv, two_sided=np.zeros(len(names), dtype=bool), extras=extras)
+                     uv=stack("uv"), has_uv=has_uv, two_sided=np.ones(len(names), dtype=bool), extras=extras)
 
 
-def export_scene(depsgraph, baked, occluders, lamps=(), world=None) -> ExportedScene:
-    """`baked`: mesh objects that get lightmaps (each needs a 'Lightmap' UV map); `occluders`: other
-    mesh objects that only take part in the light transport. `lamps` (light objects, see
-    `lights.render_lamps`) and `world` go into the scene's extras as "lights" and "world"."""
-    exporter = MeshExporter()
-    for obj in baked:
-        exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=True)
-    for obj in occluders:
-        exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=False)
-    if not exporter.meshes:
-        raise BakeError("nothing to bake: the selected objects have no faces")
-    extras, light_warnings = export_lights(depsgraph, lamps, world)
-    scene = exporter.scene(extras)
+def check_emitters(scene: Scene) -> None:
+    """Refuse a scene where nothing emits: no lamp, no world colour, no emissive face (read off the
+    materials or baked into a material map)."""
+    if any(np.any(material.emission > 0) for material in scene.material_maps.values()):
+        return
     try:
         check_has_emitter(scene)
     except SceneError:
         raise BakeError("nothing emits light: add a lamp, give the world a colour, or give a mesh an"
                         " emissive material (Emission Strength > 0)") from None
-    return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked],
+
+
+def add_occluders(exporter: MeshExporter, depsgraph, baked) -> None:
+    """Every other geometry the depsgraph renders: objects (evaluated, modifiers applied) and their
+    instances, each at its own world matrix. Hidden from renders: left out, as Cycles does."""
+    baked_names = {obj.name for obj in baked}
+    for instance in depsgraph.object_instances:
+        obj_eval = instance.object
+        original = obj_eval.original
+        if obj_eval.type not in GEOMETRY_TYPES or original.hide_render:
+            continue
+        if instance.is_instance:
+            parent = instance.parent.original.name if instance.parent else "instance"
+            exporter.instances += 1
+            exporter.add(original, obj_eval, with_lightmap_uv=False, matrix=instance.matrix_world.copy(),
+                         name=f"{parent}/{original.name}#{exporter.instances}")
+        elif original.name not in baked_names:
+            exporter.add(original, obj_eval, with_lightmap_uv=False)
+
+
+def export_scene(depsgraph, baked, occluders=None, lamps=(), world=None) -> ExportedScene:
+    """`baked`: mesh objects that get lightmaps (each needs a 'Lightmap' UV map); `occluders`: other
+    objects that only take part in the light transport — None for everything else the depsgraph
+    renders, instances included (`add_occluders`). `lamps` (light objects, see
+    `lights.render_lamps`) and `world` go into the scene's extras as "lights" and "world"."""
+    exporter = MeshExporter()
+    for obj in baked:
+        exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=True)
+    if occluders is None:
+        add_occluders(exporter, depsgraph, baked)
+    else:
+        for obj in occluders:
+            exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=False)
+    if not exporter.meshes:
+        raise BakeError("nothing to bake: the selected objects have no faces")
+    extras, light_warnings = export_lights(depsgraph, lamps, world)
+    scene = exporter.scene(extras)
+    return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked], instances=exporter.instances,
                          warnings=exporter.materials.warnings + exporter.warnings + light_warnings)

@@ -1,20 +1,75 @@
-"""Blender materials -> (reflectance, emission) in the core's units.
+"""Blender materials -> (reflectance, emission) in the core's units, read off the shader graph.
 
-Principled BSDF: Base Color -> reflectance, Emission Color x Strength -> emission
-(docs/architecture.md, Units). Diffuse BSDF and Emission shaders map the same way; Add
-and Mix shaders combine their inputs. A texture on a colour input is replaced
-by its average colour, anything else by a grey default: both with a warning,
-since the bake then cannot match what the user sees.
+For geometry whose materials cannot be baked by Cycles (instances, occluders without a
+'Lightmap' UV map; baked objects get `material_bake`): `shader_graph.walk` with numbers — a
+texture on a colour input becomes its average colour, a Principled BSDF its diffuse part
+(about (1 − metallic)(1 − transmission)(1 − 0.075 x specular level), within 2 % of Cycles at
+roughness ≥ 0.5), anything else a grey default, each with a warning.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..core import MAX_REFLECTANCE
+from .shader_graph import surface_shader, walk
 from .tags import ENABLED_NODES, original_output_node, uses_nodes
 
-DEFAULT_REFLECTANCE = np.array([0.8, 0.8, 0.8])  # Blender's default surface colour
-MAX_REFLECTANCE = 0.99  # the solve needs rho < 1; a white of 1.0 is common in Blender
+# Blender's default surface (no material): a Principled BSDF, base 0.8, roughness 0.5, specular
+# 0.5, whose diffuse albedo Cycles' Diffuse Color pass measures at 0.770
+DEFAULT_REFLECTANCE = np.array([0.770, 0.770, 0.770])
+
+
+class Values:
+    """`shader_graph` algebra of numbers, with the reader's warnings."""
+
+    def __init__(self, reader, material):
+        self.reader, self.material = reader, material
+
+    def constant(self, rgb):
+        return np.asarray(rgb, dtype=np.float64)
+
+    def colour(self, socket):
+        if not socket.is_linked:
+            return np.array(socket.default_value[:3], dtype=np.float64)
+        source = socket.links[0].from_node
+        if source.bl_idname == "ShaderNodeTexImage" and source.image is not None:
+            average = try_image_average(source.image)
+            if average is not None:
+                self.reader.warn(self.material, f"texture '{source.image.name}' on '{socket.name}' baked as its"
+                                                " average colour")
+                return average
+        self.reader.warn(self.material, f"'{socket.name}' is driven by '{source.name}'; baked with its unlinked"
+                                        " value")
+        return np.array(socket.default_value[:3], dtype=np.float64)
+
+    def scalar(self, socket):
+        if socket.is_linked:
+            self.reader.warn(self.material, f"'{socket.name}' is driven by a node; baked with its unlinked value")
+        return float(socket.default_value)
+
+    def diffuse_factor(self, node):
+        value = lambda name: float(node.inputs[name].default_value) if name in node.inputs else 0.0  # noqa: E731
+        metallic, transmission = value("Metallic"), value("Transmission Weight") or value("Transmission")
+        specular = value("Specular IOR Level") if "Specular IOR Level" in node.inputs else value("Specular")
+        if metallic > 0 or transmission > 0:
+            self.reader.warn(self.material, f"metallic {metallic:g} / transmission {transmission:g} have no diffuse"
+                                            " radiosity; baked as the diffuse part")
+        return (1 - metallic) * (1 - transmission) * (1 - 0.075 * specular)
+
+    def unknown(self, node):
+        name = node.name if node is not None else "nothing"
+        self.reader.warn(self.material, f"shader '{name}' is not diffuse; baked as a grey default")
+        return DEFAULT_REFLECTANCE, np.zeros(3)
+
+    def scale(self, colour, factor):
+        return colour * factor
+
+    def add(self, a, b):
+        return a + b
+
+    def mix(self, fac, a, b):
+        return (1 - fac) * a + fac * b
 
 
 class MaterialReader:
@@ -47,56 +102,11 @@ class MaterialReader:
     def _read(self, material):
         if not uses_nodes(material) or material.get(ENABLED_NODES):  # Blender 4.x without nodes: its colour
             return np.array(material.diffuse_color[:3], dtype=np.float64), np.zeros(3)
-        output = original_output_node(material)
-        surface = output.inputs.get("Surface") if output else None
-        if surface is None or not surface.is_linked:
+        shader = surface_shader(original_output_node(material))
+        if shader is None:
             self.warn(material, "no shader on the Material Output; using a grey default")
             return DEFAULT_REFLECTANCE, np.zeros(3)
-        return self._shader(material, surface.links[0].from_node, depth=0)
-
-    def _shader(self, material, node, depth):
-        kind = node.bl_idname
-        if depth > 16:
-            return DEFAULT_REFLECTANCE, np.zeros(3)
-        if kind == "ShaderNodeBsdfPrincipled":
-            emission = self._colour(material, node.inputs["Emission Color"], np.zeros(3)) \
-                * self._value(material, node.inputs["Emission Strength"])
-            return self._colour(material, node.inputs["Base Color"], DEFAULT_REFLECTANCE), emission
-        if kind == "ShaderNodeBsdfDiffuse":
-            return self._colour(material, node.inputs["Color"], DEFAULT_REFLECTANCE), np.zeros(3)
-        if kind == "ShaderNodeEmission":
-            emission = self._colour(material, node.inputs["Color"], np.ones(3)) \
-                * self._value(material, node.inputs["Strength"])
-            return np.zeros(3), emission
-        if kind in ("ShaderNodeAddShader", "ShaderNodeMixShader"):
-            shaders = [s for s in node.inputs if s.type == "SHADER"]
-            parts = [self._shader(material, s.links[0].from_node, depth + 1) if s.is_linked
-                     else (np.zeros(3), np.zeros(3)) for s in shaders]
-            if kind == "ShaderNodeAddShader":
-                return parts[0][0] + parts[1][0], parts[0][1] + parts[1][1]
-            fac = self._value(material, node.inputs["Fac"])
-            return ((1 - fac) * parts[0][0] + fac * parts[1][0], (1 - fac) * parts[0][1] + fac * parts[1][1])
-        if kind == "NodeReroute" and node.inputs[0].is_linked:
-            return self._shader(material, node.inputs[0].links[0].from_node, depth + 1)
-        self.warn(material, f"shader '{node.name}' is not diffuse; baked as a grey default")
-        return DEFAULT_REFLECTANCE, np.zeros(3)
-
-    def _colour(self, material, socket, default) -> np.ndarray:
-        if not socket.is_linked:
-            return np.array(socket.default_value[:3], dtype=np.float64)
-        source = socket.links[0].from_node
-        if source.bl_idname == "ShaderNodeTexImage" and source.image is not None:
-            average = try_image_average(source.image)
-            if average is not None:
-                self.warn(material, f"texture '{source.image.name}' on '{socket.name}' baked as its average colour")
-                return average
-        self.warn(material, f"'{socket.name}' is driven by '{source.name}'; baked with its unlinked value")
-        return np.array(socket.default_value[:3], dtype=np.float64) if len(socket.default_value) >= 3 else default
-
-    def _value(self, material, socket) -> float:
-        if socket.is_linked:
-            self.warn(material, f"'{socket.name}' is driven by a node; baked with its unlinked value")
-        return float(socket.default_value)
+        return walk(shader, Values(self, material))
 
 
 def srgb_to_linear(values: np.ndarray) -> np.ndarray:

@@ -44,6 +44,7 @@ class RENDER_PT_radiosity_bake(bpy.types.Panel):
         column.prop(settings, "include_unselected")
 
         column.separator()
+        column.prop(settings, "content")
         column.prop(settings, "texel_density")
         column.prop(settings, "max_resolution")
         column.prop(settings, "uv_margin")

@@ -23,6 +23,12 @@ SOLVER_ITEMS = [
     ("gauss-seidel", "Gauss-Seidel (CPU)", "Gauss-Seidel iterations with numpy: about half the sweeps of Jacobi"),
 ]
 ELEMENT_ITEMS = [(str(s), f"{s} x {s}", f"{s * s} receiving elements per patch") for s in (1, 2, 4, 8, 16)]
+CONTENT_ITEMS = [
+    ("light", "Light", "The light arriving at each texel: the material shows emission + Base Color x lightmap,"
+                       " its textures at full resolution (what game engines multiply by albedo)"),
+    ("combined", "Combined", "The outgoing radiance, as Cycles' Combined bake: textures only at the"
+                             " lightmap's resolution"),
+]
 OUTPUT_ITEMS = [
     ("PACK", "Pack into .blend", "Keep the lightmaps inside the .blend file"),
     ("EXR", "EXR next to .blend", "Save <object>_lightmap.exr beside the saved .blend file"),
@@ -57,6 +63,8 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
                              description="Margin of the Lightmap Pack used for meshes without a 'Lightmap'"
                                          " UV map")
     output: EnumProperty(name="Output", items=OUTPUT_ITEMS, default="PACK")
+    content: EnumProperty(name="Lightmap", items=CONTENT_ITEMS, default=LightmapSettings().content,
+                          description="What the lightmaps hold")
     last_bake: StringProperty(name="Last Bake", default="",
                               description="What the last bake simulated and skipped (scene analysis)")
     include_unselected: BoolProperty(name="Unselected Occlude", default=_OPTIONS.include_unselected,
@@ -72,7 +80,7 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
                               hemicube_res=self.hemicube_resolution, solver=self.solver,
                               tolerance=self.tolerance or None)
         lightmaps = LightmapSettings(texel_density=self.texel_density, max_size=self.max_resolution,
-                                     resolution_overrides=overrides)
+                                     resolution_overrides=overrides, content=self.content)
         return BakeOptions(solve=solve, lightmaps=lightmaps, output=self.output,
                            include_unselected=self.include_unselected, uv_margin=self.uv_margin)
 

@@ -93,7 +93,7 @@ from .lightmap import Lightmap, bake_lightmaps, lightmap_sizes
 from .preview import Camera, Preview, render_preview, save_preview
 from .report import Report
 from .scene.geometry import bilinear
-from .scene import (MaterialMap, Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
+from .scene import (MAX_REFLECTANCE, MaterialMap, Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
                     save_scene, scene_from_dict, subdivide)
 from .settings import (CONTENTS, DEFAULT_TOLERANCE, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, PATCH_SIZE, SHOOTING_POINTS, SOLVERS,
                        TEXEL_DENSITY, VISIBILITY_VARIANTS, LightmapSettings, SolveSettings)
@@ -102,7 +102,7 @@ from .solve import solve
 from .uvspace import surfaces_with_material_maps
 
 __all__ = [
-    "CONTENTS", "Camera", "Convergence", "DEFAULT_TOLERANCE", "GLUnavailable", "GPU", "KERNELS", "Lightmap", "LightmapSettings", "MaterialMap",
+    "CONTENTS", "Camera", "Convergence", "DEFAULT_TOLERANCE", "GLUnavailable", "GPU", "KERNELS", "Lightmap", "LightmapSettings", "MAX_REFLECTANCE", "MaterialMap",
     "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
     "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "Surface", "TEXEL_DENSITY",
     "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",

@@ -19,7 +19,7 @@ from .settings import SolveSettings
 from .shooting import element_areas
 from .solution import Solution
 from .timing import ProgressCallback, StageTimer
-from .uvspace import patch_material_values
+from .uvspace import patch_material_values, surfaces_with_material_maps
 
 
 def solve(scene: Scene, settings: SolveSettings | None = None, progress: ProgressCallback | None = None,
@@ -27,15 +27,20 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
     """Solve radiosity for `scene` (see core/__init__.py for the parameters)."""
     settings = settings or SolveSettings()
     settings.validate()
-    check_has_emitter(scene)
+    if not scene.material_maps:  # refuse before any GPU work (with maps, once they are read)
+        check_has_emitter(scene)
     started = time.perf_counter()
     timer = StageTimer()
-    with timer.stage("analyse"):
-        effects, backs = effects_for(scene, settings.skip_unneeded)
-    with timer.stage("subdivide"):
-        patches = subdivide(scene, settings.subdiv, settings.patch_size, backs)
     with open_gpu(gpu) as solve_gpu:
-        if scene.material_maps:  # textured materials: each patch takes the mean of its texels
+        if scene.material_maps:  # textured materials: surfaces and patches take their texels' means
+            with timer.stage("materials"):
+                scene = surfaces_with_material_maps(solve_gpu, scene, scene.material_maps)
+            check_has_emitter(scene)
+        with timer.stage("analyse"):
+            effects, backs = effects_for(scene, settings.skip_unneeded)
+        with timer.stage("subdivide"):
+            patches = subdivide(scene, settings.subdiv, settings.patch_size, backs)
+        if scene.material_maps:
             with timer.stage("materials"):
                 patches.reflectance, patches.emission = patch_material_values(solve_gpu, scene, patches)
         if settings.method == "hemicube":

@@ -1,0 +1,247 @@
+"""Materials as Cycles evaluates them: the diffuse albedo (Diffuse pass, Color only) and the
+emission (Emit pass) of every baked object, baked into its 'Lightmap' UVs at its lightmap's size.
+
+These passes need no light paths, so they are cheap, and they are exactly what Cycles shades:
+image and procedural textures (sRGB-decoded as Cycles does), vertex colours, node groups, Mix
+and Add shaders, the default material (a Principled BSDF: diffuse albedo 0.77 of its 0.8 base),
+a Principled BSDF's diffuse part (metallic m reflects (1 − m) · base diffusely).
+
+Cycles bakes into the active image node of each material, so objects that share a material are
+baked in separate calls (the fewest that keep every call's materials apart), objects without a
+material get Blender's default one for the bake, and everything the bake adds is removed again:
+the file is left as it was.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+
+import bpy
+import numpy as np
+
+from ..core import MaterialMap
+from .tags import LIGHTMAP_UV, NODE_TAG
+
+BAKE_SAMPLES = 4  # anti-aliasing within a texel: textures finer than a texel average out
+MARGIN = 2  # texels extended past every chart, so texels a face only grazes hold its values
+PASSES = {"albedo": ("DIFFUSE", {"COLOR"}), "emission": ("EMIT", set())}
+
+
+@contextlib.contextmanager
+def quiet_stdout():
+    """Cycles prints one "Info: Baking map saved ..." line per image to the C stdout: silence it."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "w") as devnull:
+            os.dup2(devnull.fileno(), 1)
+            yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def _bake_groups(objects) -> list[list]:
+    """Objects split into groups in which no two share a material (greedy colouring)."""
+    groups: list[tuple[list, set]] = []
+    for obj in objects:
+        materials = {slot.material.name for slot in obj.material_slots if slot.material is not None}
+        for members, used in groups:
+            if not used & materials:
+                members.append(obj)
+                used |= materials
+                break
+        else:
+            groups.append(([obj], set(materials)))
+    return [members for members, _ in groups]
+
+
+@contextlib.contextmanager
+def _cycles_for_baking(scene):
+    """Cycles on the CPU with the bake's settings, restored afterwards."""
+    render, cycles, bake = scene.render, scene.cycles, scene.render.bake
+    saved = (render.engine, cycles.device, cycles.samples, bake.margin, bake.margin_type, bake.use_clear,
+             bake.target, bake.use_selected_to_active)
+    try:
+        render.engine = "CYCLES"
+        cycles.device = "CPU"
+        cycles.samples = BAKE_SAMPLES
+        bake.margin, bake.margin_type, bake.use_clear = MARGIN, "EXTEND", True
+        bake.target, bake.use_selected_to_active = "IMAGE_TEXTURES", False
+        yield
+    finally:
+        (render.engine, cycles.device, cycles.samples, bake.margin, bake.margin_type, bake.use_clear,
+         bake.target, bake.use_selected_to_active) = saved
+
+
+@contextlib.contextmanager
+def _default_materials(objects):
+    """Objects (or slots) without a material get Blender's default surface for the bake."""
+    default = bpy.data.materials.new("Radiosity default material (bake only)")
+    if default.node_tree is None:  # Blender 4.x makes the node tree on request
+        default.use_nodes = True
+    changed = []
+    try:
+        for obj in objects:
+            if len(obj.material_slots) == 0:
+                obj.data.materials.append(default)
+                changed.append((obj, None))
+            for index, slot in enumerate(obj.material_slots):
+                if slot.material is None:
+                    changed.append((obj, (index, slot.link)))
+                    slot.link = "OBJECT"
+                    slot.material = default
+        yield
+    finally:
+        for obj, entry in reversed(changed):
+            if entry is None:
+                obj.data.materials.pop(index=len(obj.data.materials) - 1)
+            else:
+                index, link = entry
+                slot = obj.material_slots[index]
+                slot.material = None
+                slot.link = link
+        bpy.data.materials.remove(default)
+
+
+@contextlib.contextmanager
+def _bake_targets(objects, images: dict):
+    """Every material of `objects` gets an active Image Texture node showing its object's image."""
+    added, active = [], {}
+    try:
+        for obj in objects:
+            for slot in obj.material_slots:
+                tree = slot.material.node_tree
+                if slot.material.name in active:  # (embedded node trees all have one name)
+                    continue
+                active[slot.material.name] = (tree, tree.nodes.active)
+                node = tree.nodes.new("ShaderNodeTexImage")
+                node[NODE_TAG] = 1
+                node.image = images[obj.name]
+                tree.nodes.active = node
+                added.append((tree, node))
+        yield
+    finally:
+        for tree, node in added:
+            tree.nodes.remove(node)
+        for tree, previous in active.values():
+            tree.nodes.active = previous
+
+
+def _pixels(image) -> np.ndarray:
+    width, height = image.size
+    values = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(values)
+    return values.reshape(height, width, 4)[..., :3].copy()
+
+
+def bake_material_maps(context, objects, sizes: dict) -> dict:
+    """{object name: MaterialMap} for `objects` (each with a 'Lightmap' UV map), at `sizes`
+    {object name: (width, height)}."""
+    objects = [obj for obj in objects if obj.name in sizes]
+    maps = {obj.name: {} for obj in objects}
+    images = {obj.name: bpy.data.images.new(f"{obj.name} material bake", *sizes[obj.name], alpha=False,
+                                            float_buffer=True) for obj in objects}
+    view_layer = context.view_layer
+    selected, active_object = [o for o in view_layer.objects if o.select_get()], view_layer.objects.active
+    try:
+        with _cycles_for_baking(context.scene), _default_materials(objects):
+            for group in _bake_groups(objects):
+                with _bake_targets(group, images):
+                    for obj in view_layer.objects:
+                        obj.select_set(obj in group)
+                    view_layer.objects.active = group[0]
+                    for name, (kind, passes) in PASSES.items():
+                        with quiet_stdout():
+                            bpy.ops.object.bake(type=kind, pass_filter=passes, uv_layer=LIGHTMAP_UV,
+                                                margin=MARGIN, margin_type="EXTEND", use_clear=True)
+                        for obj in group:
+                            maps[obj.name][name] = _pixels(images[obj.name])
+    finally:
+        for image in images.values():
+            bpy.data.images.remove(image)
+        for obj in view_layer.objects:
+            obj.select_set(obj in selected)
+        view_layer.objects.active = active_object
+    return {name: MaterialMap(albedo=values["albedo"], emission=values["emission"]) for name, values in maps.items()}
+
+
+def _principled_nodes(objects) -> list:
+    """(material, node) of every Principled BSDF in the materials of `objects`."""
+    seen, found = set(), []
+    for obj in objects:
+        for slot in obj.material_slots:
+            material = slot.material
+            if material is None or material.node_tree is None or material.name in seen:
+                continue
+            seen.add(material.name)
+            found += [(material, node) for node in material.node_tree.nodes
+                      if node.bl_idname == "ShaderNodeBsdfPrincipled"]
+    return found
+
+
+def _probe(context, source_node, index: int):
+    """A small plane whose material is `source_node`'s unlinked settings with a white Base Color
+    and no emission, with an image node to bake into."""
+    material = bpy.data.materials.new(f"Radiosity probe {index}")
+    if material.node_tree is None:
+        material.use_nodes = True
+    nodes = material.node_tree.nodes
+    node = next(n for n in nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    for socket in source_node.inputs:
+        target = node.inputs.get(socket.identifier) or node.inputs.get(socket.name)
+        if target is not None and hasattr(socket, "default_value") and hasattr(target, "default_value"):
+            with contextlib.suppress(TypeError, ValueError, AttributeError):
+                target.default_value = socket.default_value
+    node.inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    node.inputs["Emission Strength"].default_value = 0.0
+    image = bpy.data.images.new(f"Radiosity probe {index}", 2, 2, alpha=False, float_buffer=True)
+    target = nodes.new("ShaderNodeTexImage")
+    target.image = image
+    nodes.active = target
+    mesh = bpy.data.meshes.new(f"Radiosity probe {index}")
+    mesh.from_pydata([(0, 0, -1000 - index), (1, 0, -1000 - index), (1, 1, -1000 - index), (0, 1, -1000 - index)],
+                     [], [(0, 1, 2, 3)])
+    layer = mesh.uv_layers.new(name=LIGHTMAP_UV)
+    for loop, uv in zip(mesh.polygons[0].loop_indices, ((0, 0), (1, 0), (1, 1), (0, 1))):
+        layer.data[loop].uv = uv
+    mesh.materials.append(material)
+    obj = bpy.data.objects.new(f"Radiosity probe {index}", mesh)
+    context.scene.collection.objects.link(obj)
+    return obj, material, image, mesh
+
+
+def principled_diffuse_factors(context, objects) -> dict:
+    """{material name: {Principled node name: RGB}}: the fraction of its Base Color that each
+    Principled BSDF reflects diffusely, as Cycles measures it (its specular layer, metallic and
+    transmission take the rest). The light lightmap's baked look multiplies Base Color by it."""
+    nodes = _principled_nodes(objects)
+    if not nodes:
+        return {}
+    view_layer = context.view_layer
+    selected, active_object = [o for o in view_layer.objects if o.select_get()], view_layer.objects.active
+    probes = [_probe(context, node, k) for k, (_, node) in enumerate(nodes)]
+    try:
+        with _cycles_for_baking(context.scene):
+            context.view_layer.update()
+            for obj in view_layer.objects:
+                obj.select_set(any(obj is probe[0] for probe in probes))
+            view_layer.objects.active = probes[0][0]
+            with quiet_stdout():
+                bpy.ops.object.bake(type="DIFFUSE", pass_filter={"COLOR"}, uv_layer=LIGHTMAP_UV, margin=0,
+                                    use_clear=True)
+            factors: dict = {}
+            for (material, node), (_, _, image, _) in zip(nodes, probes):
+                factors.setdefault(material.name, {})[node.name] = _pixels(image).reshape(-1, 3).mean(axis=0)
+    finally:
+        for obj, material, image, mesh in probes:
+            bpy.data.objects.remove(obj)
+            bpy.data.meshes.remove(mesh)
+            bpy.data.materials.remove(material)
+            bpy.data.images.remove(image)
+        for obj in view_layer.objects:
+            obj.select_set(obj in selected)
+        view_layer.objects.active = active_object
+    return factors
