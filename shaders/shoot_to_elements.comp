@@ -5,165 +5,41 @@
 // continue; B = E + rho H), and dB = rho_recv * dH into its residual (unpadded
 // tile, weighted by element area so that mip means are power per patch area).
 // The shooter's own residual is cleared.
-// V is looked up in the shooter's hemispherical item buffer: the receiver
-// looks for its own patch id (or any patch of its own planar surface) at its
-// projected position, within SEARCH_RADIUS texels (dissertation Algorithm 8;
-// 0 = the texel itself).
-// F is the exact unoccluded point-to-polygon form factor (Lambert's contour
-// integral over the shooter polygon clipped to the receiver's hemisphere) when
-// KERNEL_EXACT is 1, else the disk approximation A cos cos / (pi r^2 + A).
+// F and V come from the "shot" include: V is looked up in the shooter's hemispherical item
+// buffer (the receiver looks for its own patch id, or any patch of its own plane, at its
+// projected position within SEARCH_RADIUS texels: dissertation Algorithm 8), F is the exact
+// point-to-polygon form factor (or the disk approximation), a lamp's or the sun's kernel, or
+// the element's sky fraction (kind 3, shooter_radiosity: the world colour).
 // Each work group also sums the shot's hit fraction and reflected fractions
 // (per channel) of the shooter's power, added in fixed point to `energy`.
 //
-// Lamps shoot too (shooter_kind): a point lamp gives F = cos_recv / (pi r^2) times
-// its spot falloff (shooter_radiosity is then its radiant intensity), a sun
-// F = cos_recv / pi (shooter_radiosity: its irradiance), looked up in an
-// orthographic item buffer; the sky (kind 3) F = each element's unoccluded
-// cosine-weighted fraction of its hemisphere (shooter_radiosity: the world colour).
-//
-// Defines: ELEMENT_FORMAT, ELEMENTS, GUTTER, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN, RECORD_VISIBILITY,
-// OCCLUSION (0: the scene analysis proved nothing occludes, V = 1 for facing receivers),
-// INTERREFLECTION (0: nothing a receiver reflects can reach a reflector, so no residual).
+// Defines: ELEMENT_FORMAT, ELEMENTS, GUTTER, RECORD_VISIBILITY, INTERREFLECTION (0: nothing a
+// receiver reflects can reach a reflector, so no residual), and those of "shot".
 #include "bindings"
 #include "constants"
 #include "bilinear"
+#include "shot"
 layout(local_size_x = 64) in;
 
 layout(ELEMENT_FORMAT, binding = IMAGE_LIGHT) uniform image2D light;  // rgba32f, or r32f for a grey scene
 layout(ELEMENT_FORMAT, binding = IMAGE_RESIDUAL) uniform image2D residual;
-layout(binding = TEXTURE_ITEM_BUFFER) uniform usampler2D item_buffer;
-layout(binding = TEXTURE_DISTANCE_MAP) uniform sampler2D distance_map;  // distance from the eye of what each item texel shows (0: nothing)
 
 layout(std430, binding = STORAGE_PATCH_CORNERS) readonly buffer Corners { vec4 corner[]; };  // 4 per patch
 layout(std430, binding = STORAGE_PATCH_NORMAL_AREA) readonly buffer Patch { vec4 normal_area[]; };  // normal, area
 layout(std430, binding = STORAGE_PATCH_REFLECTANCE) readonly buffer Reflectance { vec4 reflectance[]; };
 layout(std430, binding = STORAGE_ELEMENT_WEIGHTS) readonly buffer ElementWeight { float element_weight[]; };  // a_e S^2 / A
 layout(std430, binding = STORAGE_SHOT_ENERGY) buffer Energy { uint energy[4]; };
-layout(std430, binding = STORAGE_PATCH_PLANE) readonly buffer Plane { int plane_of[]; };  // patches of one planar surface share it
 layout(std430, binding = STORAGE_SKY_FRACTION) readonly buffer Sky { float sky_fraction[]; };  // per element (kind 3)
 #if RECORD_VISIBILITY
 layout(std430, binding = STORAGE_RECORDED_VISIBILITY) writeonly buffer Visibility { float visibility_out[]; };
 #endif
 
 uniform int patch_count;
+uniform int shooter_keeps_residual;  // 1: the shooter shot part of its residual (an emitter its emission)
 uniform int padded_tiles_per_row;
 uniform int residual_tiles_per_row;
-uniform int item_resolution;
-
-uniform int shooter_patch;          // its residual is cleared; -1: not a patch
-uniform vec3 shooter_position;      // eye of the visibility map
-uniform vec3 shooter_axis_x;
-uniform vec3 shooter_axis_y;
-uniform vec3 shooter_normal;
-uniform vec3 shooter_polygon[4];    // corners, counter-clockwise from the front
-uniform float shooter_area;
-uniform vec3 shooter_radiosity;     // unshot radiosity being shot
-uniform int shooter_kind;           // 0: patch polygon, 1: point lamp, 2: directional (sun), 3: sky
-uniform vec3 light_direction;       // spot axis, or the sun's travel direction
-uniform float spot_cos_half;        // cosine of half the spot cone (-1: all around)
-uniform float spot_smooth;          // (1 - spot_cos_half) * blend: width of the soft edge
-uniform float ortho_extent;         // > 0: the item buffer is orthographic over this half-width
 
 shared vec4 partial[64];
-
-float visibility(vec3 x, vec3 n, int p) {
-    vec3 d = x - shooter_position;
-    if (dot(n, d) >= 0.0) {
-        return 0.0;  // the receiver turns its back to the shooter
-    }
-    vec3 q = vec3(dot(d, shooter_axis_x), dot(d, shooter_axis_y), dot(d, shooter_normal));
-    if (q.z <= 0.0) {
-        return 0.0;  // behind the shooter
-    }
-#if !OCCLUSION
-    return 1.0;
-#endif
-    float r = length(q);
-    vec2 uv = (ortho_extent > 0.0 ? q.xy / ortho_extent : q.xy / r) * 0.5 + 0.5;
-    ivec2 texel = clamp(ivec2(floor(uv * float(item_resolution))), ivec2(0), ivec2(item_resolution - 1));
-    // A planar surface cannot hide its own points, so any patch of the receiver's plane
-    // seen there counts (patch borders inside a surface are then no obstacle).
-    int plane = plane_of[p];
-    uint centre = texelFetch(item_buffer, texel, 0).r;
-    if (centre != 0u && plane_of[int(centre) - 1] == plane) {
-        return 1.0;
-    }
-    // Optionally (OCCLUDER_MARGIN >= 0) the search is for rasterization gaps only, not
-    // for peeking past occluders: when the own texel shows something clearly nearer,
-    // the receiver is hidden.
-    if (ortho_extent > 0.0) {
-        r = q.z;  // the orthographic map's distances run along its axis
-    }
-    float seen = texelFetch(distance_map, texel, 0).r;
-    if (OCCLUDER_MARGIN >= 0.0 && seen > 0.0 && seen < r * (1.0 - OCCLUDER_MARGIN)) {
-        return 0.0;
-    }
-    bool found = false;
-    for (int dy = -SEARCH_RADIUS; dy <= SEARCH_RADIUS; ++dy) {
-        for (int dx = -SEARCH_RADIUS; dx <= SEARCH_RADIUS; ++dx) {
-            ivec2 at = clamp(texel + ivec2(dx, dy), ivec2(0), ivec2(item_resolution - 1));
-            uint item = texelFetch(item_buffer, at, 0).r;
-            found = found || (item != 0u && plane_of[int(item) - 1] == plane);
-        }
-    }
-    return found ? 1.0 : 0.0;
-}
-
-// Lambert's contour integral: F = 1/(2 pi) sum_k angle_k (n . unit(r_k x r_k+1)),
-// the polygon first clipped to the receiver's front half-space.
-float polygon_form_factor(vec3 x, vec3 n) {
-    vec3 poly[5];
-    int count = 0;
-    for (int k = 0; k < 4; ++k) {
-        vec3 a = shooter_polygon[k] - x;
-        vec3 b = shooter_polygon[(k + 1) % 4] - x;
-        float da = dot(a, n);
-        float db = dot(b, n);
-        if (da >= 0.0) {
-            poly[count++] = a;
-        }
-        if ((da >= 0.0) != (db >= 0.0)) {
-            poly[count++] = a + (b - a) * (da / (da - db));
-        }
-    }
-    float sum = 0.0;
-    for (int k = 0; k < count; ++k) {
-        vec3 a = poly[k];
-        vec3 b = poly[(k + 1) % count];
-        float la = length(a);
-        float lb = length(b);
-        if (la < 1e-20 || lb < 1e-20) {
-            continue;
-        }
-        vec3 c = cross(a / la, b / lb);
-        float lc = length(c);
-        if (lc > 1e-12) {
-            sum += atan(lc, dot(a, b) / (la * lb)) * dot(n, c) / lc;
-        }
-    }
-    // the shooter's corners run counter-clockwise seen from its front, i.e.
-    // clockwise seen from a receiver in front of it: the sum is negative
-    return max(-sum, 0.0) / (2.0 * PI);
-}
-
-// A point lamp: irradiance I cos / r^2, so the radiance-equivalent factor is cos / (pi r^2).
-float point_lamp_factor(vec3 x, vec3 n) {
-    vec3 d = x - shooter_position;
-    float r2 = dot(d, d);
-    vec3 u = d / sqrt(r2);
-    float t = spot_smooth > 0.0 ? clamp((dot(u, light_direction) - spot_cos_half) / spot_smooth, 0.0, 1.0)
-                                : float(dot(u, light_direction) > spot_cos_half);
-    return max(-dot(n, u), 0.0) * t * t * (3.0 - 2.0 * t) / (PI * r2);
-}
-
-float disk_form_factor(vec3 x, vec3 n) {
-    vec3 d = shooter_position - x;
-    float r2 = dot(d, d);
-    float r = sqrt(r2);
-    float cos_receiver = max(dot(n, d), 0.0) / r;
-    float cos_shooter = max(-dot(shooter_normal, d), 0.0) / r;
-    return shooter_area * cos_receiver * cos_shooter / (PI * r2 + shooter_area);
-}
 
 void main() {
     const int per_patch = ELEMENTS * ELEMENTS;
@@ -180,7 +56,11 @@ void main() {
         ivec2 residual_texel = ivec2((p % residual_tiles_per_row) * ELEMENTS + i,
                                      (p / residual_tiles_per_row) * ELEMENTS + j);
         if (p == shooter_patch) {
-            imageStore(residual, residual_texel, vec4(0.0));
+            // the shot is cleared from the shooter's residual: all of it, or only what it shot
+            vec4 kept = shooter_keeps_residual != 0
+                      ? imageLoad(residual, residual_texel) - vec4(element_weight[element] * shooter_radiosity, 0.0)
+                      : vec4(0.0);
+            imageStore(residual, residual_texel, max(kept, vec4(0.0)));
 #if RECORD_VISIBILITY
             visibility_out[e] = 0.0;
 #endif
@@ -191,26 +71,10 @@ void main() {
                                     corner[4 * p + 3].xyz, s, t);
             vec3 n = normal_area[p].xyz;
             // the sky's visibility is already in each element's sky fraction
-            float v = shooter_kind == 3 ? 1.0 : visibility(x, n, p);
+            float f = shot_factor(x, n, plane_of[p], shooter_kind == 3 ? sky_fraction[element] : 0.0);
 #if RECORD_VISIBILITY
-            visibility_out[e] = v;
+            visibility_out[e] = shooter_kind == 3 ? 1.0 : visibility(x, n, plane_of[p]);
 #endif
-            float f = 0.0;
-            if (v > 0.0) {
-                if (shooter_kind == 1) {
-                    f = point_lamp_factor(x, n);
-                } else if (shooter_kind == 2) {
-                    f = max(-dot(n, light_direction), 0.0) / PI;
-                } else if (shooter_kind == 3) {
-                    f = sky_fraction[element];
-                } else {
-#if KERNEL_EXACT
-                    f = polygon_form_factor(x, n);
-#else
-                    f = disk_form_factor(x, n);
-#endif
-                }
-            }
             if (f > 0.0) {
                 vec3 rho = reflectance[p].rgb;
                 vec3 delta = rho * shooter_radiosity * f;

@@ -39,7 +39,7 @@ ALLOWED = {
     "report": BASE | {"scene", "hemicube", "progressive"},
     "solution": BASE | {"scene", "report"},
     "solve": BASE | {"gpu", "scene", "shooting", "uvspace", "hemicube", "progressive", "report", "solution"},
-    "lightmap": BASE | {"gpu", "imaging", "scene", "uvspace", "solution"},
+    "lightmap": BASE | {"gpu", "imaging", "scene", "uvspace", "visibility", "shooting", "solution"},
     "preview": BASE | {"gpu", "scene", "lightmap"},
 }
 

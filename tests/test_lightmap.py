@@ -26,7 +26,8 @@ FINE_DENSITY = 256.0  # the demo's density: the smallest Cornell faces (block si
 
 def bake_lightmaps(scene, solution, texel_density=CORNELL_DENSITY, gpu=None, objects=None, **settings):
     """core.bake_lightmaps with this file's defaults (128 texels per metre, up to 2048 texels, B)."""
-    settings = {"max_size": 2048, "content": "combined", **settings}  # these tests follow B
+    # these tests follow the interpolation of B (the direct light per texel is tested in test_texel_light.py)
+    settings = {"max_size": 2048, "content": "combined", "direct_per_texel": False, **settings}
     return core.bake_lightmaps(scene, solution, LightmapSettings(texel_density=texel_density, **settings), gpu=gpu,
                                objects=objects)
 

@@ -79,6 +79,8 @@ class LightmapSettings:
     power_of_two: bool = False  # round sizes up to powers of two
     gutter: int = LIGHTMAP_GUTTER
     content: str = "light"  # "light": H, shown as emission + albedo x lightmap; "combined": B = E + ρH
+    direct_per_texel: bool = True  # lamps' and emitters' light recomputed at every texel (sharp shadows)
+    direct_map_resolution: int = 1024  # pixels across the visibility maps of that direct light
 
     def validate(self) -> None:
         if not (math.isfinite(self.texel_density) and self.texel_density > 0):

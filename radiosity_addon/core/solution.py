@@ -18,6 +18,9 @@ class Solution:
     report: Report | None = None  # None for preview snapshots and solutions made by hand (tests)
     patch_light: np.ndarray | None = None  # (P, 3) light H arriving, B = E + ρH
     element_light: np.ndarray | None = None  # (P, S, S, 3)
+    patch_direct: np.ndarray | None = None  # (P, 3) the part of H straight from lamps and emitters
+    element_direct: np.ndarray | None = None  # (P, S, S, 3)
+    scene: object = None  # the scene as solved (material maps applied), for the lightmaps' direct light
 
     def npz_arrays(self) -> dict:
         """The `solve --output OUT.npz` arrays (docs/architecture.md, Command line)."""

@@ -44,15 +44,16 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
             with timer.stage("materials"):
                 patches.reflectance, patches.emission = patch_material_values(solve_gpu, scene, patches)
         if settings.method == "hemicube":
-            radiosity, light, details, _ = solve_hemicube(solve_gpu, scene, patches, settings, effects, timer,
-                                                          progress, should_cancel)
-            elements = element_light = None
+            radiosity, light, direct, details, _ = solve_hemicube(solve_gpu, scene, patches, settings, effects,
+                                                                  timer, progress, should_cancel)
+            elements = element_light = element_direct = None
         else:
             shown = None if preview is None else (
                 lambda patch_values, element_values: preview(Solution(patches, patch_values, element_values)))
-            radiosity, elements, element_light, details = solve_progressive(
+            radiosity, elements, element_light, element_direct, details = solve_progressive(
                 solve_gpu, scene, patches, settings, effects, timer, progress, should_cancel, shown, preview_interval)
-            light = patch_means(element_areas(patches, settings.elements), element_light)
+            areas = element_areas(patches, settings.elements)
+            light, direct = patch_means(areas, element_light), patch_means(areas, element_direct)
     timer.timings["total"] = time.perf_counter() - started
     element_count = len(patches) * (settings.elements ** 2 if elements is not None else 1)
     report = Report(method=settings.method, settings=settings,
@@ -62,4 +63,5 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
                     radiosity_max=float(np.max(radiosity)))
     return Solution(patches=patches, patch_radiosity=np.asarray(radiosity, dtype=np.float64),
                     element_radiosity=elements, report=report, patch_light=np.asarray(light, dtype=np.float64),
-                    element_light=element_light)
+                    element_light=element_light, patch_direct=np.asarray(direct, dtype=np.float64),
+                    element_direct=element_direct, scene=scene)

@@ -14,6 +14,8 @@ STORAGE_GROUPS = {
         "SHOT_ENERGY": 4, "RECORDED_VISIBILITY": 5, "PATCH_PLANE": 6, "SKY_FRACTION": 7,
     },
     "selection": {"PATCH_NORMAL_AREA": 1, "SHOT_ENERGY": 4, "SELECTION": 6},  # the next shooter
+    "texels": {"TEXEL_POSITION": 0, "TEXEL_NORMAL": 1, "TEXEL_PLANE": 2, "TEXEL_LIGHT": 3,
+               "PATCH_PLANE": 6},  # direct light into lightmap texels
     "hemicube": {"DELTA_FORM_FACTORS": 1, "FORM_FACTOR_ROWS": 2},
     "jacobi": {"FORM_FACTORS": 0, "JACOBI_EMISSION": 1, "JACOBI_REFLECTANCE": 2, "RADIOSITY_OLD": 3,
                "RADIOSITY_NEW": 4, "CONVERGENCE": 5},

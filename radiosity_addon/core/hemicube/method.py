@@ -72,18 +72,18 @@ def as_rgb(radiosity: np.ndarray) -> np.ndarray:
 
 def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
                    timer: StageTimer, progress=None, should_cancel=None):
-    """(patch radiosity B (P, 3), patch light H (P, 3) with B = E + ρH, HemicubeDetails, F).
-    H = H_lamps + F B on every row F has; a patch that reflects nothing gets no row (with skips
-    on), so its H holds only the lamps' and sky's light."""
+    """(patch radiosity B (P, 3), patch light H (P, 3) with B = E + ρH, its direct part (lamps and
+    emitters, P x 3), HemicubeDetails, F). H = H_lamps + H_sky + F B on every row F has; a patch
+    that reflects nothing gets no row (with skips on), so its H holds only the lamps' and sky's."""
     check_memory(len(patches), settings.memory_limit_bytes)
-    emission = np.asarray(patches.emission, dtype=np.float64)
-    lamp_light = np.zeros_like(emission)
+    own_emission = np.asarray(patches.emission, dtype=np.float64)
+    lamp_light = sky_light = np.zeros_like(own_emission)
     direct_work = None
-    if has_direct_light(scene):  # lamps and sky: B = E + ρ H_lamps + ρ F B
+    if has_direct_light(scene):  # lamps and sky: B = E + ρ (H_lamps + H_sky) + ρ F B
         with timer.stage("direct_light"), gpu.resources() as res:
-            lamp_light, direct_work = direct_light_on_patches(res, scene, patches, settings.visibility,
-                                                              settings.visibility_res, effects.occlusion)
-    emission = emission + patches.reflectance * lamp_light
+            lamp_light, sky_light, direct_work = direct_light_on_patches(
+                res, scene, patches, settings.visibility, settings.visibility_res, effects.occlusion)
+    emission = own_emission + patches.reflectance * (lamp_light + sky_light)
     reflective = np.flatnonzero(patches.reflectance.max(axis=1) > 0)
     rows = reflective if settings.skip_unneeded else np.arange(len(patches))
     with timer.stage("form_factors"):
@@ -106,7 +106,9 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
                                                     monitor)
         else:  # one bounce: light reflected once reaches nothing that reflects again
             radiosity = emission + reflectance * (form_factors.astype(np.float64) @ emission)
-    light = lamp_light + form_factors.astype(np.float64) @ as_rgb(radiosity)
+    gathered = form_factors.astype(np.float64)
+    light = lamp_light + sky_light + gathered @ as_rgb(radiosity)
+    direct = lamp_light + gathered @ own_emission
     row_sums = form_factors[rows].sum(axis=1, dtype="f8") if len(rows) else np.zeros(1)
     details = HemicubeDetails(
         solver=monitor.name, iterations=monitor.iterations, relative_change=float(monitor.relative_change),
@@ -116,4 +118,4 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
         work=HemicubeWork(hemicubes=hemicubes, form_factor_rows=int(len(rows)), channels_solved=effects.channels,
                           linear_solve=bool(effects.interreflection), direct=direct_work),
     )
-    return as_rgb(radiosity), light, details, form_factors
+    return as_rgb(radiosity), light, direct, details, form_factors

@@ -29,6 +29,7 @@ from ..settings import LightmapSettings
 from ..solution import Solution
 from ..uvspace import rasterize
 from . import charts
+from .direct import direct_light, texel_points
 from .lattice import continuous_lattice, element_values
 from .mips import filled_image, mip_levels
 from .size import resolve_size
@@ -148,10 +149,19 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     objects, object_of_surface, surface_uv = layouts.objects, layouts.object_of_surface, layouts.surface_uv
     patches = solution.patches
     light = settings.content == "light"
-    radiosity = element_values(solution)
+    report = solution.report
+    per_texel = settings.direct_per_texel and solution.patch_direct is not None and report is not None
     mapped = np.isin(patches.surface, [i for name in scene.material_maps for i in scene.object_surfaces.get(name, ())])
-    # H for "light", and for "combined" where a material map turns H into B texel by texel; else B
-    values = element_values(solution, light=True) if light or mapped.any() else radiosity
+    # what is interpolated: the light H (less its direct part when texels get that), or B for
+    # "combined" where no material map turns H into B texel by texel
+    if per_texel:
+        values = element_values(solution, light=True) - element_values(solution, direct=True)
+    elif light or mapped.any():
+        values = element_values(solution, light=True)
+        if not light:
+            values = np.where(mapped[:, None, None, None], values, element_values(solution))
+    else:
+        values = element_values(solution)
     if len(values) != len(patches):
         raise SolveError("the solution does not belong to this scene (patch counts differ)")
     scene_size = max(scene.diameter, 1e-30)
@@ -164,33 +174,56 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
 
     group = np.where(patches.is_back, -1, object_of_surface[patches.surface])  # a lightmap holds the front
     baked = np.flatnonzero(group >= 0)
-    if not light and mapped.any():
-        values = np.where(mapped[:, None, None, None], values, radiosity)
     lattice = np.zeros((len(patches),) + (values.shape[1] + 2,) * 2 + (3,))
     lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
                                         patches.normal[baked], world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
-    lightmaps = {}
+    rasters = {}
     with open_gpu(gpu) as lightmap_gpu:
         for name, indices in objects.items():
             size = layouts.sizes[name]
             mine = np.flatnonzero(np.isin(patches.surface, indices) & ~patches.is_back)
             corners_texels = patch_uv[mine] * np.asarray(size, dtype=np.float64)
             texel_values, signed_ids = rasterize(lightmap_gpu, corners_texels, lattice[mine], size)
-            material = scene.material_maps.get(name)
-            if not light and material is not None:
-                texel_values = combined_texels(texel_values, material, size, name)
-            covered = signed_ids != 0
-            inside = signed_ids > 0
-            patch_index = np.where(inside, mine[np.maximum(signed_ids, 1) - 1], -1).astype(np.int32)
-            if not covered.any():
+            if not (signed_ids != 0).any():
                 raise SolveError(f"object '{name}': its faces cover no texel of a {size[0]}x{size[1]}"
                                  " lightmap; raise the texel density or its resolution")
-            levels, coverage = mip_levels(texel_values.astype(np.float64), covered, settings.gutter)
-            lightmaps[name] = Lightmap(object_name=name, levels=levels, coverage=coverage, patch_index=patch_index,
-                                       surfaces=indices, surface_uv=surface_uv[indices],
-                                       texel_density=math.sqrt(inside.sum() / scene.area[indices].sum()),
-                                       content=settings.content)
+            points = texel_points(lightmap_gpu, patches, mine, corners_texels, size) if per_texel else None
+            rasters[name] = (texel_values.astype(np.float64), signed_ids, mine, points)
+        if per_texel:
+            add_direct_light(lightmap_gpu, solution, rasters, settings)
+    lightmaps = {}
+    for name, (texel_values, signed_ids, mine, points) in rasters.items():
+        size, indices = layouts.sizes[name], objects[name]
+        material = scene.material_maps.get(name)
+        if not light and material is not None:
+            texel_values = combined_texels(texel_values, material, size, name)
+        elif not light and per_texel:  # B = E + ρ H with each texel's patch values
+            owner = np.maximum(points[1], 0)
+            texel_values = patches.emission[owner] + patches.reflectance[owner] * texel_values
+        covered = signed_ids != 0
+        inside = signed_ids > 0
+        patch_index = np.where(inside, mine[np.maximum(signed_ids, 1) - 1], -1).astype(np.int32)
+        levels, coverage = mip_levels(texel_values, covered, settings.gutter)
+        lightmaps[name] = Lightmap(object_name=name, levels=levels, coverage=coverage, patch_index=patch_index,
+                                   surfaces=indices, surface_uv=surface_uv[indices],
+                                   texel_density=math.sqrt(inside.sum() / scene.area[indices].sum()),
+                                   content=settings.content)
     return lightmaps
+
+
+def add_direct_light(gpu: GPU, solution: Solution, rasters: dict, settings: LightmapSettings) -> None:
+    """Add every lightmap's direct light texel by texel (one pass over all texels per shot)."""
+    covered = {name: entry[3][2] for name, entry in rasters.items()}
+    points = np.concatenate([entry[3][0][covered[name]] for name, entry in rasters.items()])
+    owners = np.concatenate([entry[3][1][covered[name]] for name, entry in rasters.items()])
+    report = solution.report
+    light, _ = direct_light(gpu, solution.scene, solution.patches, points, owners, report.settings.visibility,
+                            settings.direct_map_resolution, report.effects.occlusion)
+    start = 0
+    for name, (texel_values, _, _, _) in rasters.items():
+        count = int(covered[name].sum())
+        texel_values[covered[name]] = np.maximum(texel_values[covered[name]] + light[start:start + count], 0.0)
+        start += count
 
 
 def combined_texels(light: np.ndarray, material, size: tuple[int, int], name: str) -> np.ndarray:

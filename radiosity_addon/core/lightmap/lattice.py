@@ -18,11 +18,16 @@ from ..solution import Solution
 SMOOTH_EDGE_DEGREES = 30.0  # faces meeting flatter than this share values at their edge (Blender's auto smooth)
 
 
-def element_values(solution: Solution, light: bool = False) -> np.ndarray:
-    """(P, S, S, 3) radiosity B (or with `light` the light H, B = E + ρH): the elements, or the patch
-    values as S = 1 (a grey one-channel result is repeated into three)."""
-    elements, patches = ((solution.element_light, solution.patch_light) if light
-                         else (solution.element_radiosity, solution.patch_radiosity))
+def element_values(solution: Solution, light: bool = False, direct: bool = False) -> np.ndarray:
+    """(P, S, S, 3) radiosity B (with `light` the light H, B = E + ρH; with `direct` the part of H
+    straight from lamps and emitters): the elements, or the patch values as S = 1 (a grey
+    one-channel result is repeated into three)."""
+    if direct:
+        elements, patches = solution.element_direct, solution.patch_direct
+    elif light:
+        elements, patches = solution.element_light, solution.patch_light
+    else:
+        elements, patches = solution.element_radiosity, solution.patch_radiosity
     if patches is None:
         raise SolveError("the solution holds no light values (made by hand?); bake its lightmaps as 'combined'")
     if elements is not None:

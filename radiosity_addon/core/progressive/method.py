@@ -23,7 +23,7 @@ from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
 from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchShooters, ShootingPass,
-                        shoot_direct_light)
+                        shoot_lamps, shoot_sky)
 from ..timing import StageTimer
 from ..visibility import VARIANTS, VisibilityMap
 from .ledger import EnergyLedger, ambient_term, time_left
@@ -76,8 +76,8 @@ def patch_means(areas: np.ndarray, elements: np.ndarray) -> np.ndarray:
 
 def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
                       timer: StageTimer, progress=None, should_cancel=None, preview=None, preview_interval=2.0):
-    """(patch radiosity (P, 3), element radiosity (P, S, S, 3), element light H (P, S, S, 3),
-    ProgressiveDetails), with B = E + ρH.
+    """(patch radiosity (P, 3), element radiosity (P, S, S, 3), element light H (P, S, S, 3), its
+    direct part (lamps and emitters, not the sky), ProgressiveDetails), with B = E + ρH.
     `effects` (the scene analysis) may switch off visibility maps (nothing occludes) and
     residual updates (no interreflection: only emitters and lamps ever shoot).
     `preview(patch radiosity, element radiosity)` is called every `preview_interval` seconds with
@@ -102,8 +102,10 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                                     occluder_margin=variant.occluder_margin, occlusion=effects.occlusion,
                                     interreflection=effects.interreflection)
         with timer.stage("direct_light"):
-            direct = shoot_direct_light(res, scene, patches, settings.elements, shooting, visibility_map,
-                                        effects.occlusion)
+            direct = shoot_lamps(scene, patches, shooting, visibility_map, effects.occlusion)
+            lamp_light = textures.read_light()
+            shoot_sky(res, scene, patches, settings.elements, shooting, visibility_map, direct)
+            before_emitters = textures.read_light()
             textures.build_mipmaps()
             first = selector.select()  # also drops the lamp shots' energy sums: they are booked here
         # lamps and the sky enter the ledger as the power their first bounce adds to the unshot
@@ -116,6 +118,11 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         last_preview = time.perf_counter()
         unshot_gpu = emitted.copy()
         stop_reason = "tolerance"
+        # every emitter shoots its own emission first (and keeps what it received): the light after
+        # those shots, less the sky's, is the direct light the lightmaps recompute per texel
+        power = patches.area * patches.emission.sum(axis=1)
+        forced = [int(p) for p in np.argsort(-power, kind="stable") if power[p] > 0]
+        direct_light = None
         while True:
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
@@ -138,13 +145,20 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                     shown = textures.read_radiosity() + patches.reflectance[:, None, None, :] * ambient(unshot_gpu)
                     preview(patch_means(textures.areas, shown), shown)
                 last_preview = time.perf_counter()
-            if fraction_left <= tolerance or selection.patch < 0 or emitted_total <= 0:
+            if not forced and direct_light is None:
+                direct_light = lamp_light + textures.read_light() - before_emitters
+            if not forced and (fraction_left <= tolerance or selection.patch < 0 or emitted_total <= 0):
                 break
             if shots >= max_shots:
                 stop_reason = "max_shots"
                 break
-            shooter = shooters.shooter(selection.patch, selection.residual,
-                                       selection.centroid if settings.shoot_from == "centroid" else None)
+            if forced:  # an emitter's own emission, from its centre
+                patch = forced.pop(0)
+                shooter = shooters.shooter(patch, patches.emission[patch])
+                shooter.keeps_residual = True
+            else:
+                shooter = shooters.shooter(selection.patch, selection.residual,
+                                           selection.centroid if settings.shoot_from == "centroid" else None)
             ledger.pending = shooter.power
             if effects.occlusion:
                 with timer.stage("visibility"):
@@ -157,6 +171,8 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
 
         with timer.stage("readback"):
             light = textures.read_light()
+        if direct_light is None:  # stopped by the shot budget among the emitters
+            direct_light = lamp_light + light - before_emitters
         elements = textures.radiosity(light)
         areas = textures.areas
 
@@ -176,4 +192,4 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                              texel_bytes=16 if effects.channels == 3 else 4,
                              residual_updates=bool(effects.interreflection), direct=direct),
     )
-    return patch_radiosity, elements, light, details
+    return patch_radiosity, elements, light, direct_light, details

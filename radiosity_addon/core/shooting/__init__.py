@@ -1,12 +1,16 @@
-"""Shooters (patches, lamps, the sun, the sky), the receiving element textures and the pass
-that adds a shot's light to them: shared by both methods."""
+"""Shooters (patches, lamps, the sun, the sky), the receiving element textures, the pass that adds
+a shot's light to them, and the same pass over lightmap texels for the direct light: shared by
+both methods and the lightmaps."""
 
-from .direct import DirectLightWork, direct_light_on_patches, has_direct_light, shoot_direct_light
+from .direct import (DirectLightWork, direct_light_on_patches, direct_shooters, has_direct_light, shoot_each,
+                     shoot_lamps, shoot_sky)
 from .elements import ElementLayout, ElementTextures, element_areas, element_centers, element_parameters
 from .lamps import lamp_shooters
 from .shooters import PatchShooters, Shooter
 from .shooting_pass import PatchBuffers, ShootingPass
+from .texel_pass import TexelReceivers
 
 __all__ = ["DirectLightWork", "ElementLayout", "ElementTextures", "PatchBuffers", "PatchShooters", "Shooter",
-           "ShootingPass", "direct_light_on_patches", "element_areas", "element_centers", "element_parameters",
-           "has_direct_light", "lamp_shooters", "shoot_direct_light"]
+           "ShootingPass", "TexelReceivers", "direct_light_on_patches", "direct_shooters", "element_areas",
+           "element_centers", "element_parameters", "has_direct_light", "lamp_shooters", "shoot_each", "shoot_lamps",
+           "shoot_sky"]

@@ -3,6 +3,10 @@
 Progressive refinement does this before its first patch shot (what receivers reflect of it
 becomes unshot radiosity); the hemi-cube method does it into one-element patches and adds the
 result to its emission term, B = E + ρ·H_lamps + ρ F B.
+
+The direct light — lamps, the sun and the emissive patches, not the sky — is also what the
+lightmaps recompute texel by texel (`direct_shooters`, `texel_pass`): the solve records how much
+of its element light it is, so only the smooth rest is interpolated.
 """
 
 from __future__ import annotations
@@ -15,7 +19,8 @@ from ..gpu import Resources
 from ..scene import Patches, Scene
 from ..visibility import VARIANTS, VisibilityMap
 from .elements import ElementTextures
-from .lamps import lamp_shooters
+from .lamps import lamp_shooters, polygon_shooters
+from .shooters import Shooter
 from .shooting_pass import PatchBuffers, ShootingPass
 from .sky import SKY_HEMICUBE_RESOLUTION, element_frames, sky_fractions
 
@@ -28,40 +33,74 @@ class DirectLightWork:
     sky_hemicubes: int = 0
 
 
+MAX_SPLIT_EMITTERS = 64  # emissive patches split into pieces for the texel pass; beyond, one shot each
+
+
 def has_direct_light(scene: Scene) -> bool:
     return bool(scene.lamps) or bool(np.any(scene.world_color > 0))
 
 
-def shoot_direct_light(res: Resources, scene: Scene, patches: Patches, elements: int, shooting: ShootingPass,
-                       visibility_map: VisibilityMap, occlusion: bool) -> DirectLightWork:
-    """Shoot every lamp (and the sky) once."""
+def lamps_as_shooters(scene: Scene) -> list[Shooter]:
     low, high = scene.bounds
-    centre, diameter = (low + high) / 2, scene.diameter
-    work = DirectLightWork(lamps=len(scene.lamps))
-    for lamp in scene.lamps:
-        for shooter in lamp_shooters(lamp, centre, diameter):
-            if occlusion:
-                visibility_map.render(shooter.position, shooter.axes, -1, shooter.ortho_extent)
-                work.lamp_visibility_maps += 1
-            shooting.shoot(shooter, visibility_map)
+    return [shooter for lamp in scene.lamps for shooter in lamp_shooters(lamp, (low + high) / 2, scene.diameter)]
+
+
+def direct_shooters(scene: Scene, patches: Patches) -> list[Shooter]:
+    """Every shot of the direct light: the lamps', and the emissive patches' in pieces (one each
+    when there are more than MAX_SPLIT_EMITTERS of them)."""
+    emitting = np.flatnonzero(np.any(patches.emission > 0, axis=1))
+    size = scene.diameter if len(emitting) <= MAX_SPLIT_EMITTERS else np.inf
+    pieces = [shooter for p in emitting
+              for shooter in polygon_shooters(patches.corners[p], patches.emission[p], size, patch=int(p))]
+    return lamps_as_shooters(scene) + pieces
+
+
+def shoot_each(shooters: list[Shooter], receivers, visibility_map: VisibilityMap, drawn: np.ndarray,
+               occlusion: bool) -> int:
+    """Shoot `shooters` into `receivers` (a ShootingPass or TexelReceivers), each from a visibility
+    map of its own (a patch's leaves the patch out); returns the maps rendered."""
+    maps = 0
+    for shooter in shooters:
+        if occlusion:
+            skip = int(drawn[shooter.patch]) if shooter.patch >= 0 else -1
+            visibility_map.render(shooter.position, shooter.axes, skip, shooter.ortho_extent)
+            maps += 1
+        receivers.shoot(shooter, visibility_map)
+    return maps
+
+
+def shoot_lamps(scene: Scene, patches: Patches, shooting: ShootingPass, visibility_map: VisibilityMap,
+                occlusion: bool) -> DirectLightWork:
+    """Shoot every lamp once."""
+    shooters = lamps_as_shooters(scene)
+    maps = shoot_each(shooters, shooting, visibility_map, patches.drawn, occlusion)
+    return DirectLightWork(lamps=len(scene.lamps), lamp_visibility_maps=maps)
+
+
+def shoot_sky(res: Resources, scene: Scene, patches: Patches, elements: int, shooting: ShootingPass,
+              visibility_map: VisibilityMap, work: DirectLightWork) -> None:
+    """Every element gathers the world colour times its sky fraction."""
     sky = scene.world_color
     if np.any(sky > 0):
-        fractions = sky_fractions(res, patches, element_frames(patches, elements), SKY_HEMICUBE_RESOLUTION, diameter)
+        fractions = sky_fractions(res, patches, element_frames(patches, elements), SKY_HEMICUBE_RESOLUTION,
+                                  scene.diameter)
         work.sky_hemicubes = len(fractions)
         shooting.shoot_sky(sky, fractions, visibility_map)
-    return work
 
 
 def direct_light_on_patches(res: Resources, scene: Scene, patches: Patches, visibility: str, visibility_res: int,
-                            occlusion: bool) -> tuple[np.ndarray, DirectLightWork]:
-    """(P, 3) light H each patch gets from the lamps and the sky at its centre (it reflects ρ · H),
-    for the hemi-cube method's emission term: the shooting pass with one element per patch."""
+                            occlusion: bool) -> tuple[np.ndarray, np.ndarray, DirectLightWork]:
+    """(P, 3) light H each patch gets at its centre from the lamps, and (P, 3) from the sky (it
+    reflects ρ · H), for the hemi-cube method's emission term: the shooting pass with one element
+    per patch."""
     with res.gpu.resources() as scoped:
         textures = ElementTextures(scoped, patches, 1)
         buffers = PatchBuffers(scoped, patches, textures)
         visibility_map = VisibilityMap(scoped, patches, visibility_res, visibility, scene.diameter)
         shooting = ShootingPass(scoped, textures, buffers, "exact", VARIANTS[visibility].search_radius,
                                 occluder_margin=VARIANTS[visibility].occluder_margin, occlusion=occlusion)
-        work = shoot_direct_light(scoped, scene, patches, 1, shooting, visibility_map, occlusion)
-        light = textures.read_light()[:, 0, 0]
-    return light, work
+        work = shoot_lamps(scene, patches, shooting, visibility_map, occlusion)
+        lamps = textures.read_light()[:, 0, 0]
+        shoot_sky(scoped, scene, patches, 1, shooting, visibility_map, work)
+        sky = textures.read_light()[:, 0, 0] - lamps
+    return lamps, sky, work

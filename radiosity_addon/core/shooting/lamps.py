@@ -31,18 +31,24 @@ def lamp_shooters(lamp: Lamp, scene_centre: np.ndarray, scene_diameter: float) -
         return [Shooter(position=eye, axes=(*tangent_frame(lamp.direction), lamp.direction),
                         polygon=np.zeros((4, 3)), area=0.0, radiosity=lamp.color * lamp.strength, kind=DIRECTIONAL,
                         light_direction=tuple(lamp.direction), ortho_extent=scene_diameter / 2)]
-    # An area lamp is split into sub-lamps, each with its own visibility map, so shadows keep
-    # their penumbra (one map from the centre turns a nearby object's penumbra into umbra).
-    normal = polygon_area_vector(lamp.vertices)
+    return polygon_shooters(lamp.vertices, lamp.area_radiance, scene_diameter)
+
+
+def polygon_shooters(corners: np.ndarray, radiance: np.ndarray, scene_diameter: float, patch: int = -1) -> list[Shooter]:
+    """An emitting polygon (4, 3) (a triangle repeats its last corner) split into pieces, each with
+    its own visibility map, so shadows keep their penumbra (one map from the centre turns a nearby
+    object's penumbra into umbra): pieces at most AREA_LAMP_PIECE of the scene, 8 x 8 at most.
+    `patch`: the patch the polygon is (left out of its own maps), -1 for a lamp."""
+    normal = polygon_area_vector(corners)
     normal = normal / np.linalg.norm(normal)
-    sides = np.linalg.norm(np.roll(lamp.vertices, -1, axis=0) - lamp.vertices, axis=1)
+    sides = np.linalg.norm(np.roll(corners, -1, axis=0) - corners, axis=1)
     split = int(np.clip(np.ceil(sides.max() / (scene_diameter * AREA_LAMP_PIECE)), 1, AREA_LAMP_MAX_SPLIT))
     grid = np.arange(split + 1) / split
     s0, t0 = np.meshgrid(grid[:-1], grid[:-1])
     offsets = np.array([[0, 0], [1, 0], [1, 1], [0, 1]]) / split
-    corners = bilinear(lamp.vertices[None], s0.ravel()[:, None] + offsets[:, 0], t0.ravel()[:, None] + offsets[:, 1])[0]
-    radiance = lamp.area_radiance
-    x_axis = tangent_frame(normal, lamp.vertices[1] - lamp.vertices[0])
-    return [Shooter(position=piece.mean(axis=0), axes=(*x_axis, normal), polygon=piece,
-                    area=float(np.linalg.norm(polygon_area_vector(piece))), radiosity=radiance, kind=POLYGON)
-            for piece in corners]
+    pieces = bilinear(corners[None], s0.ravel()[:, None] + offsets[:, 0], t0.ravel()[:, None] + offsets[:, 1])[0]
+    x_axis = tangent_frame(normal, corners[1] - corners[0])
+    areas = np.linalg.norm(0.5 * np.cross(pieces[:, 2] - pieces[:, 0], pieces[:, 3] - pieces[:, 1]), axis=1)
+    return [Shooter(position=piece.mean(axis=0), axes=(*x_axis, normal), polygon=piece, area=float(area),
+                    radiosity=np.asarray(radiance, dtype=np.float64), kind=POLYGON, patch=patch)
+            for piece, area in zip(pieces, areas) if area > 0]

@@ -27,6 +27,7 @@ class Shooter:
     spot_cos_half: float = -1.0  # -1: no cone
     spot_smooth: float = 0.0
     ortho_extent: float = 0.0  # > 0: orthographic visibility map (sun)
+    keeps_residual: bool = False  # the patch shoots only `radiosity` and keeps the rest of its residual
 
     @property
     def power(self) -> np.ndarray:

@@ -19,6 +19,41 @@ from .shooters import SKY, Shooter
 MAX_GROUPS = 65535  # work groups per dispatch dimension guaranteed by OpenGL
 
 
+def shot_uniforms(shooter: Shooter, visibility_map: VisibilityMap) -> dict:
+    """The "shot" include's uniforms for one shooter and the map rendered from it."""
+    vector = lambda v: tuple(map(float, v))  # noqa: E731
+    return {
+        "item_resolution": visibility_map.resolution,
+        "shooter_patch": shooter.patch,
+        "shooter_position": vector(shooter.position),
+        "shooter_axis_x": vector(shooter.axes[0]),
+        "shooter_axis_y": vector(shooter.axes[1]),
+        "shooter_normal": vector(shooter.axes[2]),
+        "shooter_polygon": [vector(c) for c in shooter.polygon],
+        "shooter_area": float(shooter.area),
+        "shooter_radiosity": vector(shooter.radiosity),
+        "shooter_kind": shooter.kind,
+        "light_direction": vector(shooter.light_direction),
+        "spot_cos_half": float(shooter.spot_cos_half),
+        "spot_smooth": float(shooter.spot_smooth),
+        "ortho_extent": float(shooter.ortho_extent),
+        "shooter_keeps_residual": int(shooter.keeps_residual),
+    }
+
+
+def set_uniforms(program, uniforms: dict) -> None:
+    for name, value in uniforms.items():
+        if program.get(name, None) is not None:  # a kernel may not use every uniform
+            program[name] = value
+
+
+def dispatch(program, count: int) -> None:
+    """Run `program` over `count` invocations of 64, rows past the portable group limit in y."""
+    groups = work_groups(count, 64)
+    rows = -(-groups // MAX_GROUPS)
+    program.run(-(-groups // rows), rows)
+
+
 class PatchBuffers:
     """Per-patch and per-element storage buffers shared by the selection and shooting passes."""
 
@@ -64,27 +99,7 @@ class ShootingPass:
         self.visibility = res.buffer(reserve=4 * self.element_count) if record_visibility else None
 
     def shoot(self, shooter: Shooter, visibility_map: VisibilityMap) -> None:
-        vector = lambda v: tuple(map(float, v))  # noqa: E731
-        uniforms = {
-            **self.layout_uniforms,
-            "item_resolution": visibility_map.resolution,
-            "shooter_patch": shooter.patch,
-            "shooter_position": vector(shooter.position),
-            "shooter_axis_x": vector(shooter.axes[0]),
-            "shooter_axis_y": vector(shooter.axes[1]),
-            "shooter_normal": vector(shooter.axes[2]),
-            "shooter_polygon": [vector(c) for c in shooter.polygon],
-            "shooter_area": float(shooter.area),
-            "shooter_radiosity": vector(shooter.radiosity),
-            "shooter_kind": shooter.kind,
-            "light_direction": vector(shooter.light_direction),
-            "spot_cos_half": float(shooter.spot_cos_half),
-            "spot_smooth": float(shooter.spot_smooth),
-            "ortho_extent": float(shooter.ortho_extent),
-        }
-        for name, value in uniforms.items():
-            if self.program.get(name, None) is not None:  # a kernel may not use every uniform
-                self.program[name] = value
+        set_uniforms(self.program, {**self.layout_uniforms, **shot_uniforms(shooter, visibility_map)})
         self.buffers.bind()
         if self.visibility is not None:
             self.visibility.bind_to_storage_buffer(storage("RECORDED_VISIBILITY"))
@@ -92,9 +107,7 @@ class ShootingPass:
         self.textures.light.bind_to_image(image_unit("LIGHT"), read=True, write=True)
         self.textures.residual.bind_to_image(image_unit("RESIDUAL"), read=True, write=True, level=0)
         self.ctx.memory_barrier()
-        groups = work_groups(self.element_count, 64)
-        rows = -(-groups // MAX_GROUPS)
-        self.program.run(-(-groups // rows), rows)
+        dispatch(self.program, self.element_count)
         self.ctx.memory_barrier()
 
     def shoot_sky(self, color: np.ndarray, sky_fraction: np.ndarray, visibility_map: VisibilityMap) -> None:

@@ -1,0 +1,48 @@
+"""Direct light texel by texel: every texel of every lightmap gathers the lamps', the sun's and the
+emitters' light with its own visibility (`shooting.TexelReceivers`), so shadows and penumbrae are
+as sharp as the lightmap can show; the smooth rest of the light comes from the solve's elements.
+
+A texel's point is the world point its centre shows on the patch whose UV footprint holds it (a
+texel a footprint only grazes: the footprint's nearest point), so every sample lies on a
+surface and takes that surface's plane for the visibility lookup.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..gpu import GPU
+from ..scene import Patches, Scene
+from ..scene.geometry import bilinear
+from ..settings import VISIBILITY_VARIANTS
+from ..shooting import TexelReceivers, direct_shooters, shoot_each
+from ..uvspace import rasterize
+from ..visibility import VARIANTS, VisibilityMap
+
+
+def texel_points(gpu: GPU, patches: Patches, rows: np.ndarray, corners_texels: np.ndarray, size) -> tuple:
+    """(positions (H, W, 3), owner patch (H, W), covered (H, W)) of one lightmap whose patches are
+    `rows` with UV corners in texels `corners_texels`."""
+    params = np.array([0.0, 0.5, 1.0])
+    s, t = np.meshgrid(params, params)
+    lattice = bilinear(patches.corners[rows], s, t)  # (n, 3, 3, 3): the bilinear map is exact on it
+    positions, signed_ids = rasterize(gpu, corners_texels, lattice, size)
+    covered = signed_ids != 0
+    owner = np.where(covered, rows[np.abs(signed_ids) - 1], -1)
+    return positions.astype(np.float64), owner, covered
+
+
+def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray,
+                 visibility: str, resolution: int, occlusion: bool) -> tuple[np.ndarray, int]:
+    """(N, 3) direct light H at `points` (N, 3) lying on the patches `owners` (N,), and the
+    number of shots."""
+    shooters = direct_shooters(scene, patches)
+    if not shooters or len(points) == 0:
+        return np.zeros((len(points), 3)), 0
+    variant = VARIANTS[visibility if visibility in VISIBILITY_VARIANTS else "search"]
+    with gpu.resources() as res:
+        receivers = TexelReceivers(res, patches, points, patches.normal[owners], patches.plane[owners], "exact",
+                                   variant.search_radius, variant.occluder_margin, occlusion)
+        visibility_map = VisibilityMap(res, patches, resolution, visibility, scene.diameter)
+        shoot_each(shooters, receivers, visibility_map, patches.drawn, occlusion)
+        return receivers.read_light(), len(shooters)

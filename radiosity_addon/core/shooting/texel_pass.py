@@ -1,0 +1,48 @@
+"""Direct light at lightmap resolution: the shooting pass over points (lightmap texels) instead
+of element tiles, for the shots that light the scene directly — lamps, the sun and pieces of the
+emissive patches (`direct.direct_shooters`) — so shadows and penumbrae are as sharp as the
+lightmap can show, while the smooth indirect light comes from the solve."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..gpu import Resources, storage
+from ..scene import Patches
+from ..visibility import VisibilityMap
+from .shooters import Shooter
+from .shooting_pass import dispatch, set_uniforms, shot_uniforms
+
+
+class TexelReceivers:
+    """Points that gather direct light: world positions (N, 3), normals (N, 3) and planes (N,)
+    (the plane of the patch each lies on: `Patches.plane`)."""
+
+    def __init__(self, res: Resources, patches: Patches, positions: np.ndarray, normals: np.ndarray,
+                 planes: np.ndarray, kernel: str, search_radius: int, occluder_margin: float, occlusion: bool):
+        self.ctx, self.count = res.ctx, len(positions)
+        vec4 = lambda a: np.concatenate([a, np.zeros((len(a), 1))], axis=1).astype(np.float32)  # noqa: E731
+        self.buffers = {
+            "TEXEL_POSITION": res.buffer(vec4(positions).tobytes()),
+            "TEXEL_NORMAL": res.buffer(vec4(normals).tobytes()),
+            "TEXEL_PLANE": res.buffer(np.asarray(planes, dtype=np.int32).tobytes()),
+            "TEXEL_LIGHT": res.buffer(np.zeros((self.count, 4), dtype=np.float32).tobytes()),
+            "PATCH_PLANE": res.buffer(patches.plane.astype(np.int32).tobytes()),
+        }
+        self.program = res.gpu.compute("shoot_to_texels.comp", defines={
+            "KERNEL_EXACT": int(kernel == "exact"), "SEARCH_RADIUS": search_radius,
+            "OCCLUDER_MARGIN": float(occluder_margin), "OCCLUSION": int(occlusion)})
+
+    def shoot(self, shooter: Shooter, visibility_map: VisibilityMap) -> None:
+        set_uniforms(self.program, {"texel_count": self.count, **shot_uniforms(shooter, visibility_map)})
+        for name, buffer in self.buffers.items():
+            buffer.bind_to_storage_buffer(storage(name))
+        visibility_map.bind()
+        self.ctx.memory_barrier()
+        dispatch(self.program, self.count)
+        self.ctx.memory_barrier()
+
+    def read_light(self) -> np.ndarray:
+        """(N, 3) float64 light H gathered by each point."""
+        return np.frombuffer(self.buffers["TEXEL_LIGHT"].read(), dtype=np.float32).reshape(-1, 4)[:, :3].astype(
+            np.float64)

@@ -1,0 +1,73 @@
+"""Direct light per lightmap texel: an emitter's light at every texel against Lambert's exact
+formula, and a sun's shadow as sharp as the lightmap, texel by texel against a ray cast."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scenes import surface
+
+from radiosity_addon.core import (LightmapSettings, SolveSettings, bake_lightmaps, point_to_polygon,
+                                  scene_from_dict, solve)
+
+FLOOR = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]
+UV = [[0, 0], [1, 0], [1, 1], [0, 1]]
+
+
+def texel_centres(size, corners):
+    """World points of the texel centres of a lightmap of `size` on the planar quad `corners` with
+    the unit UV square (row 0 at v = 0)."""
+    width, height = size
+    v, u = np.meshgrid((np.arange(height) + 0.5) / height, (np.arange(width) + 0.5) / width, indexing="ij")
+    c = np.asarray(corners, dtype=float)
+    return (c[0] * ((1 - u) * (1 - v))[..., None] + c[1] * (u * (1 - v))[..., None]
+            + c[2] * (u * v)[..., None] + c[3] * ((1 - u) * v)[..., None])
+
+
+@pytest.mark.parametrize("method", ["progressive", "hemicube"])
+def test_an_emitters_light_at_every_texel_is_lamberts_formula(gpu, method):
+    """A 0.5 m square emitter 0.4 m above a 2 m floor: the light at each texel (content light) is
+    E · F(texel -> emitter), whatever the patches (one 2 m patch here)."""
+    emitter_corners = [[0.75, 0.75, 0.4], [0.75, 1.25, 0.4], [1.25, 1.25, 0.4], [1.25, 0.75, 0.4]]
+    floor = {**surface("floor", FLOOR, 0.5, 0.0), "uv": UV}
+    emitter = {**surface("emitter", emitter_corners, 0.0, 2.0), "uv": UV}
+    scene = scene_from_dict({"surfaces": [floor, emitter]})
+    settings = SolveSettings(method=method, subdiv=1, elements=1, hemicube_res=32, tolerance=1e-4)
+    solution = solve(scene, settings, gpu=gpu)
+    lightmap = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16), gpu=gpu)["floor"]
+    inside = lightmap.patch_index >= 0
+    points = texel_centres(lightmap.size, FLOOR)[inside]
+    exact = 2.0 * point_to_polygon(points, np.tile([0, 0, 1.0], (len(points), 1)),
+                                   np.asarray(emitter_corners)[None])[:, 0]
+    measured = lightmap.rgba[inside][:, 0]
+    assert exact.max() > 0.5
+    np.testing.assert_allclose(measured, exact, rtol=2e-3, atol=1e-4 * exact.max())
+
+
+def test_a_suns_shadow_is_as_sharp_as_the_lightmap(gpu):
+    """A sun straight down on a floor under a 0.5 m x 0.5 m plate (its own patch): texels whose
+    centres lie under the plate are dark, the others lit by S cos/π... texel by texel, where a
+    patch-sized answer would blur the edge over a whole 1 m patch."""
+    plate = [[0.6, 0.6, 0.5], [1.1, 0.6, 0.5], [1.1, 1.1, 0.5], [0.6, 1.1, 0.5]]  # facing up
+    sun = {"name": "sun", "type": "sun", "direction": [0, 0, -1], "color": [1, 1, 1], "strength": 3.0}
+    data = {"surfaces": [{**surface("floor", FLOOR, 0.5, 0.0), "uv": UV},
+                         {**surface("plate", plate, 0.5, 0.0), "uv": UV}], "lights": [sun]}
+    scene = scene_from_dict(data)
+    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3), gpu=gpu)
+    lightmap = bake_lightmaps(scene, solution, LightmapSettings(texel_density=32), gpu=gpu)["floor"]
+    inside = lightmap.patch_index >= 0
+    points = texel_centres(lightmap.size, FLOOR)
+    shadowed = (points[..., 0] > 0.6) & (points[..., 0] < 1.1) & (points[..., 1] > 0.6) & (points[..., 1] < 1.1)
+    light = lightmap.rgba[..., 0]
+    lit_value = 3.0 / np.pi
+    # a texel whose centre is within half a texel of the edge may go either way
+    half = 0.5 / 32
+    near_edge = np.zeros_like(shadowed)
+    for axis in (0, 1):
+        for edge in (0.6, 1.1):
+            near_edge |= np.abs(points[..., axis] - edge) < half * 1.01
+    clear = inside & ~near_edge
+    direct = light - light[clear & shadowed].mean()  # the shadow keeps the (smooth) indirect light
+    assert np.all(np.abs(direct[clear & ~shadowed] - lit_value) < 0.05 * lit_value + 0.05)
+    assert light[clear & shadowed].max() < 0.1 * lit_value
+    assert (clear & shadowed).sum() > 200
