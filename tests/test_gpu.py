@@ -83,7 +83,7 @@ FAILURES = {  # stage -> (settings, object and method to break)
     "sky hemi-cubes": (PROGRESSIVE, "radiosity_addon.core.visibility.hemicube.HemicubeRenderer.coverage"),
     "element readback": (PROGRESSIVE, "radiosity_addon.core.shooting.elements.ElementTextures.read_light"),
     "lamps into patches": (HEMICUBE, "radiosity_addon.core.shooting.shooting_pass.ShootingPass.shoot"),
-    "hemi-cube rows": (HEMICUBE, "radiosity_addon.core.visibility.hemicube.HemicubeRenderer.rows"),
+    "hemi-cube rows": (HEMICUBE, "radiosity_addon.core.hemicube.form_factors.HemicubeRenderer.coverage"),
     "Jacobi sweeps": (HEMICUBE, "radiosity_addon.core.hemicube.linear_solvers.Convergence.done"),
 }
 

@@ -13,7 +13,8 @@ from radiosity_addon.core import SolveError, SolveSettings
 from radiosity_addon.core import solve
 
 SOLVERS = ["jacobi-gpu", "jacobi-cpu", "gauss-seidel"]
-HEMICUBES_AT_256 = SolveSettings(method="hemicube", subdiv=8, hemicube_res=256, skip_unneeded=False)
+# subdivided 8 x 8, 2 x 2 hemi-cubes per patch, no refinement: the patches the test names
+HEMICUBES_AT_256 = SolveSettings(method="hemicube", subdiv=8, hemicube_res=256, skip_unneeded=False, refinements=0)
 
 
 def test_opposed_rectangle_formula_matches_design_values():
@@ -36,7 +37,7 @@ def test_opposed_squares_receiver_radiosity(gpu, distance, exact):
     scene = scene_from_dict(opposed_squares(distance))
     # skips off: nothing occludes here, so the analysis would use analytic factors instead
     solution = solve(scene, HEMICUBES_AT_256, gpu=gpu)
-    assert solution.report.work.hemicubes == 128
+    assert solution.report.work.hemicubes == 4 * 128
     mean = area_weighted_mean(solution, 0)
     np.testing.assert_allclose(mean, 0.5 * exact, rtol=0.03)
 
@@ -44,7 +45,7 @@ def test_opposed_squares_receiver_radiosity(gpu, distance, exact):
 def test_perpendicular_squares_receiver_radiosity(gpu):
     scene = scene_from_dict(perpendicular_squares())
     solution = solve(scene, HEMICUBES_AT_256, gpu=gpu)
-    assert solution.report.work.hemicubes == 128
+    assert solution.report.work.hemicubes == 4 * 128
     np.testing.assert_allclose(area_weighted_mean(solution, 0), 0.5 * 0.200044, rtol=0.04)
 
 
@@ -76,7 +77,7 @@ def test_furnace(gpu, solver, reflectance, skip_unneeded):
     with analytic unoccluded form factors on one channel; with skips off, by hemi-cubes."""
     scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
     settings = SolveSettings(method="hemicube", subdiv=3, hemicube_res=64, solver=solver, tolerance=1e-6,
-                             skip_unneeded=skip_unneeded)
+                             skip_unneeded=skip_unneeded, hemicube_elements=1)
     solution = solve(scene, settings, gpu=gpu)
     assert solution.report.work.hemicubes == (0 if skip_unneeded else 54)
     np.testing.assert_allclose(solution.patch_radiosity, 1 / (1 - reflectance), rtol=0.01)

@@ -38,7 +38,9 @@ ALLOWED = {
     "progressive": BASE | {"gpu", "scene", "visibility", "shooting"},
     "report": BASE | {"scene", "hemicube", "progressive"},
     "solution": BASE | {"scene", "report"},
-    "solve": BASE | {"gpu", "scene", "shooting", "uvspace", "hemicube", "progressive", "report", "solution"},
+    "refinement": BASE | {"gpu", "scene", "uvspace", "progressive"},
+    "solve": BASE | {"gpu", "scene", "shooting", "uvspace", "hemicube", "progressive", "report", "solution",
+              "refinement"},
     "lightmap": BASE | {"gpu", "imaging", "scene", "uvspace", "visibility", "shooting", "solution"},
     "preview": BASE | {"gpu", "scene", "lightmap"},
 }

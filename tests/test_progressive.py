@@ -162,10 +162,10 @@ def test_furnace_disk_kernel_loses_energy(gpu):
 
 @pytest.fixture(scope="module")
 def lit_cube(gpu):
-    """Closed cube, ρ = 0.9, emitting ceiling; records the progress callback."""
+    """Closed cube, ρ = 0.9, emitting ceiling; records the progress callback (one pass: no refinement)."""
     scene = cube(0.9, {"ceiling": 1.0})
     calls = []
-    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3), gpu=gpu,
+    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3, refinements=0), gpu=gpu,
                      progress=lambda fraction, message, details: calls.append((fraction, dict(details))))
     return scene, solution, calls
 

@@ -4,7 +4,7 @@ analysis let it skip and what each method did. `to_dict()` gives the report file
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 from .hemicube import HemicubeDetails
 from .progressive import ProgressiveDetails
@@ -29,6 +29,7 @@ class Report:
     effects: SceneEffects  # what the scene analysis decided to simulate
     details: HemicubeDetails | ProgressiveDetails
     radiosity_max: float
+    refined: list = field(default_factory=list)  # patches split at each refinement (their light changed fast)
 
     @property
     def work(self):
@@ -46,7 +47,8 @@ class Report:
     def to_dict(self) -> dict:
         return {"method": self.method, "settings": self.settings.as_dict(), "counts": asdict(self.counts),
                 "timings": dict(self.timings), **self.details.entries(),
-                "effects": {**asdict(self.effects), **self.work.entries()}, "radiosity_max": self.radiosity_max}
+                "effects": {**asdict(self.effects), **self.work.entries()}, "radiosity_max": self.radiosity_max,
+                "refined": list(self.refined)}
 
     def summary_line(self) -> str:
         """One line saying what the solve simulated and skipped (the Blender panel shows it)."""

@@ -31,6 +31,7 @@ class SolveSettings:
     patch_size: float = PATCH_SIZE  # with subdiv None: longest patch side in scene units
     elements: int = 4  # S x S elements per patch (progressive), S a power of two
     hemicube_res: int = 128  # pixels across the hemi-cube's top face
+    hemicube_elements: int = 2  # hemi-cube method: S x S receiving elements (hemi-cubes) per patch
     solver: str = "jacobi-gpu"
     tolerance: float | None = None  # None: the method's default
     max_iterations: int = 100_000  # linear solvers
@@ -41,6 +42,8 @@ class SolveSettings:
     shoot_from: str = "centroid"  # progressive: visibility map from the unshot power's centroid | centre
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
     skip_unneeded: bool = True  # simulate only the effects the scene calls for (scene.analysis)
+    refinements: int = 2  # rounds of splitting patches where the direct light changes fast, before the solve
+    refine_threshold: float = 0.5  # split a patch whose light spreads more than this fraction of its mean
 
     @property
     def effective_tolerance(self) -> float:
@@ -60,12 +63,16 @@ class SolveSettings:
             raise SolveError(f"patch size must be positive, got {self.patch_size}")
         if self.elements < 1 or self.elements & (self.elements - 1):
             raise SolveError("elements per patch must be a power of two (1, 2, 4, 8, ...)")
+        if not 1 <= self.hemicube_elements <= 8:
+            raise SolveError("hemi-cube elements per patch side must lie between 1 and 8")
         if self.hemicube_res < 8 or self.hemicube_res % 2:
             raise SolveError("hemi-cube resolution must be an even number of at least 8")
         if not 16 <= self.visibility_res <= 8192:
             raise SolveError("visibility map resolution must lie between 16 and 8192 pixels")
         if not 0 < self.effective_tolerance < 1:
             raise SolveError("tolerance must lie between 0 and 1")
+        if not 0 <= self.refinements <= 8 or not self.refine_threshold > 0:
+            raise SolveError("refinements must lie between 0 and 8, the refine threshold above 0")
 
     def as_dict(self) -> dict:
         return asdict(self)

@@ -12,12 +12,13 @@ import numpy as np
 
 from .gpu import GPU, open_gpu
 from .hemicube import solve_hemicube
-from .progressive import patch_means, solve_progressive
+from .progressive import solve_progressive
 from .report import Counts, Report
 from .scene import Scene, check_has_emitter, effects_for, subdivide
 from .settings import SolveSettings
-from .shooting import element_areas
+from .shooting import element_areas, patch_means
 from .solution import Solution
+from .refinement import refine
 from .timing import ProgressCallback, StageTimer
 from .uvspace import patch_material_values, surfaces_with_material_maps
 
@@ -43,25 +44,38 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
         if scene.material_maps:
             with timer.stage("materials"):
                 patches.reflectance, patches.emission = patch_material_values(solve_gpu, scene, patches)
-        if settings.method == "hemicube":
-            radiosity, light, direct, details, _ = solve_hemicube(solve_gpu, scene, patches, settings, effects,
-                                                                  timer, progress, should_cancel)
-            elements = element_light = element_direct = None
-        else:
-            shown = None if preview is None else (
-                lambda patch_values, element_values: preview(Solution(patches, patch_values, element_values)))
-            radiosity, elements, element_light, element_direct, details = solve_progressive(
-                solve_gpu, scene, patches, settings, effects, timer, progress, should_cancel, shown, preview_interval)
-            areas = element_areas(patches, settings.elements)
-            light, direct = patch_means(areas, element_light), patch_means(areas, element_direct)
+        patches, refined = refine(solve_gpu, scene, patches, backs, settings, effects, timer)
+        result = _solve_patches(solve_gpu, scene, patches, settings, effects, timer, progress, should_cancel,
+                                preview, preview_interval)
+    radiosity, elements, light, element_light, direct, element_direct, details = result
     timer.timings["total"] = time.perf_counter() - started
-    element_count = len(patches) * (settings.elements ** 2 if elements is not None else 1)
+    element_count = len(patches) * elements.shape[1] ** 2
     report = Report(method=settings.method, settings=settings,
                     counts=Counts(surfaces=len(scene), objects=len(scene.object_names), patches=len(patches),
                                   elements=element_count),
                     timings=timer.timings, effects=effects, details=details,
-                    radiosity_max=float(np.max(radiosity)))
+                    radiosity_max=float(np.max(radiosity)), refined=refined)
     return Solution(patches=patches, patch_radiosity=np.asarray(radiosity, dtype=np.float64),
                     element_radiosity=elements, report=report, patch_light=np.asarray(light, dtype=np.float64),
                     element_light=element_light, patch_direct=np.asarray(direct, dtype=np.float64),
                     element_direct=element_direct, scene=scene)
+
+
+def _solve_patches(gpu: GPU, scene: Scene, patches, settings: SolveSettings, effects, timer: StageTimer, progress,
+                   should_cancel, preview, preview_interval):
+    """One method's solve on these patches: (B, element B, H, element H, direct H, element direct H,
+    details); element arrays (P, S, S, 3), or for the hemi-cube method's one value per patch the
+    patch arrays as 1 x 1 elements."""
+    if settings.method == "hemicube":
+        radiosity, elements, element_light, element_direct, details, _ = solve_hemicube(
+            gpu, scene, patches, settings, effects, timer, progress, should_cancel)
+        areas = element_areas(patches, settings.hemicube_elements)
+        return (radiosity, elements, patch_means(areas, element_light), element_light,
+                patch_means(areas, element_direct), element_direct, details)
+    shown = None if preview is None else (
+        lambda patch_values, element_values: preview(Solution(patches, patch_values, element_values)))
+    radiosity, elements, element_light, element_direct, details = solve_progressive(
+        gpu, scene, patches, settings, effects, timer, progress, should_cancel, shown, preview_interval)
+    areas = element_areas(patches, settings.elements)
+    return (radiosity, elements, patch_means(areas, element_light), element_light,
+            patch_means(areas, element_direct), element_direct, details)

@@ -15,11 +15,10 @@ import numpy as np
 from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
-from ..shooting import DirectLightWork, direct_light_on_patches, has_direct_light
+from ..shooting import DirectLightWork, direct_light_on_patches, element_areas, has_direct_light, patch_means
 from ..timing import StageTimer, scaled_progress
 from . import linear_solvers
-from .analytic import unoccluded_form_factor_matrix
-from .form_factors import check_memory, form_factor_matrix
+from .form_factors import check_memory, element_form_factors, patch_rows
 
 READBACK = ("one block of F rows (hemi-cubes in the batch x patches, uint32) per batch;"
             " the solver reads back two floats every 16 Jacobi sweeps")
@@ -72,28 +71,29 @@ def as_rgb(radiosity: np.ndarray) -> np.ndarray:
 
 def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
                    timer: StageTimer, progress=None, should_cancel=None):
-    """(patch radiosity B (P, 3), patch light H (P, 3) with B = E + ρH, its direct part (lamps and
-    emitters, P x 3), HemicubeDetails, F). H = H_lamps + H_sky + F B on every row F has; a patch
-    that reflects nothing gets no row (with skips on), so its H holds only the lamps' and sky's."""
-    check_memory(len(patches), settings.memory_limit_bytes)
+    """(patch radiosity B (P, 3), element radiosity (P, S, S, 3), element light H with B = E + ρH,
+    its direct part (lamps and emitters), HemicubeDetails, patch F). Receivers are the S x S
+    elements of every patch (S = hemicube_elements), shooters the patches: H_e = H_lamps + H_sky
+    + F_e B on every element; a patch that reflects nothing gets no rows (with skips on), so its H
+    holds only the lamps' and sky's."""
+    size = settings.hemicube_elements
+    check_memory(len(patches), settings.memory_limit_bytes, size)
     own_emission = np.asarray(patches.emission, dtype=np.float64)
-    lamp_light = sky_light = np.zeros_like(own_emission)
+    lamp_light = sky_light = np.zeros((len(patches), size, size, 3))
     direct_work = None
     if has_direct_light(scene):  # lamps and sky: B = E + ρ (H_lamps + H_sky) + ρ F B
         with timer.stage("direct_light"), gpu.resources() as res:
             lamp_light, sky_light, direct_work = direct_light_on_patches(
-                res, scene, patches, settings.visibility, settings.visibility_res, effects.occlusion)
-    emission = own_emission + patches.reflectance * (lamp_light + sky_light)
+                res, scene, patches, settings.visibility, settings.visibility_res, effects.occlusion, size)
+    areas = element_areas(patches, size)
+    emission = own_emission + patches.reflectance * patch_means(areas, lamp_light + sky_light)
     reflective = np.flatnonzero(patches.reflectance.max(axis=1) > 0)
     rows = reflective if settings.skip_unneeded else np.arange(len(patches))
     with timer.stage("form_factors"):
-        if effects.occlusion:
-            form_factors = form_factor_matrix(gpu, patches, settings.hemicube_res, scene.diameter,
-                                              scaled_progress(progress, 0.0, 0.8), should_cancel, rows)
-            hemicubes = len(rows)
-        else:
-            form_factors = unoccluded_form_factor_matrix(patches.center, patches.normal, patches.corners, rows)
-            hemicubes = 0
+        element_rows = element_form_factors(gpu, patches, size, settings.hemicube_res, scene.diameter, rows,
+                                            effects.occlusion, scaled_progress(progress, 0.0, 0.8), should_cancel)
+        form_factors = patch_rows(element_rows, patches, rows, size)
+        hemicubes = len(element_rows) if effects.occlusion else 0
     reflectance = solved_channels(patches.reflectance, effects.channels)
     emission = solved_channels(emission, effects.channels)
     monitor = linear_solvers.Convergence(
@@ -106,9 +106,12 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
                                                     monitor)
         else:  # one bounce: light reflected once reaches nothing that reflects again
             radiosity = emission + reflectance * (form_factors.astype(np.float64) @ emission)
-    gathered = form_factors.astype(np.float64)
-    light = lamp_light + sky_light + gathered @ as_rgb(radiosity)
-    direct = lamp_light + gathered @ own_emission
+    radiosity = as_rgb(radiosity)
+    light, direct = lamp_light + sky_light, lamp_light.copy()
+    gathered = element_rows.astype(np.float64)
+    light[rows] += (gathered @ radiosity).reshape(len(rows), size, size, 3)
+    direct[rows] += (gathered @ own_emission).reshape(len(rows), size, size, 3)
+    elements = own_emission[:, None, None, :] + patches.reflectance[:, None, None, :] * light
     row_sums = form_factors[rows].sum(axis=1, dtype="f8") if len(rows) else np.zeros(1)
     details = HemicubeDetails(
         solver=monitor.name, iterations=monitor.iterations, relative_change=float(monitor.relative_change),
@@ -118,4 +121,4 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
         work=HemicubeWork(hemicubes=hemicubes, form_factor_rows=int(len(rows)), channels_solved=effects.channels,
                           linear_solve=bool(effects.interreflection), direct=direct_work),
     )
-    return as_rgb(radiosity), light, direct, details, form_factors
+    return radiosity, elements, light, direct, details, form_factors

@@ -22,7 +22,7 @@ from ..errors import SolveCancelled
 from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
-from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchShooters, ShootingPass,
+from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchShooters, ShootingPass, patch_means,
                         shoot_lamps, shoot_sky)
 from ..timing import StageTimer
 from ..visibility import VARIANTS, VisibilityMap
@@ -69,19 +69,16 @@ class ProgressiveDetails:
                 "shots_per_second": self.shots_per_second}
 
 
-def patch_means(areas: np.ndarray, elements: np.ndarray) -> np.ndarray:
-    """(P, 3) area-weighted means of element values (P, S, S, 3) with element areas (P, S, S)."""
-    return (areas[..., None] * elements).sum(axis=(1, 2)) / areas.sum(axis=(1, 2))[:, None]
-
-
 def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
-                      timer: StageTimer, progress=None, should_cancel=None, preview=None, preview_interval=2.0):
+                      timer: StageTimer, progress=None, should_cancel=None, preview=None, preview_interval=2.0,
+                      direct_only: bool = False):
     """(patch radiosity (P, 3), element radiosity (P, S, S, 3), element light H (P, S, S, 3), its
     direct part (lamps and emitters, not the sky), ProgressiveDetails), with B = E + ρH.
     `effects` (the scene analysis) may switch off visibility maps (nothing occludes) and
     residual updates (no interreflection: only emitters and lamps ever shoot).
     `preview(patch radiosity, element radiosity)` is called every `preview_interval` seconds with
-    the radiosity so far plus the ambient term ρ · Ambient (for display only)."""
+    the radiosity so far plus the ambient term ρ · Ambient (for display only). With `direct_only`
+    it stops once the lamps and emitters have shot (what the refinement estimates from)."""
     started = time.perf_counter()
     variant = VARIANTS[settings.visibility]
     tolerance = settings.effective_tolerance
@@ -147,7 +144,8 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                 last_preview = time.perf_counter()
             if not forced and direct_light is None:
                 direct_light = lamp_light + textures.read_light() - before_emitters
-            if not forced and (fraction_left <= tolerance or selection.patch < 0 or emitted_total <= 0):
+            if not forced and (direct_only or fraction_left <= tolerance or selection.patch < 0 or emitted_total <= 0):
+                stop_reason = "direct light" if direct_only else stop_reason
                 break
             if shots >= max_shots:
                 stop_reason = "max_shots"

@@ -131,6 +131,42 @@ def split_counts(scene: Scene, subdiv: int | None, patch_size: float) -> np.ndar
     return np.where(scene.is_triangle[:, None], triangle[:, None], np.stack([along_s, along_t], axis=1))
 
 
+def fronts_of(patches: Patches) -> Patches:
+    """The front patches alone (backs come after them)."""
+    count = patches.front_count
+    return Patches(corners=patches.corners[:count], uv=patches.uv[:count], surface=patches.surface[:count],
+                   reflectance=patches.reflectance[:count], emission=patches.emission[:count],
+                   is_triangle=patches.is_triangle[:count], grid=patches.grid[:count], split=patches.split)
+
+
+def split_patches(patches: Patches, mask: np.ndarray, backs: np.ndarray) -> Patches:
+    """Every patch in `mask` (P,) (or whose twin is) replaced by its 2 x 2 bilinear children — a
+    triangle's top children are triangles again — and the backs of the surfaces in `backs` (S,)
+    made anew. Children keep their parent's place, so patches of a surface stay together."""
+    count = patches.front_count
+    chosen = mask[:count].copy()
+    twins = patches.twin[:count]
+    chosen[twins >= 0] |= mask[twins[twins >= 0]]
+    fronts = fronts_of(patches)
+    params, rows, _ = quad_grid(2, 2)
+    children = bilinear(fronts.corners[chosen], params[..., 0], params[..., 1])  # (n, 4, 4, 3)
+    child_uv = bilinear(fronts.uv[chosen], params[..., 0], params[..., 1])
+    repeat = np.where(chosen, 4, 1)
+    take = np.repeat(np.arange(count), repeat)
+    corners = fronts.corners[take].copy()
+    uv = fronts.uv[take].copy()
+    first = np.concatenate([[0], np.cumsum(repeat)[:-1]])[chosen]  # where each split patch's children start
+    places = (first[:, None] + np.arange(4)[None]).ravel()
+    corners[places] = children.reshape(-1, 4, 3)
+    uv[places] = child_uv.reshape(-1, 4, 2)
+    is_triangle = fronts.is_triangle[take].copy()
+    is_triangle[places] = (fronts.is_triangle[chosen][:, None] & (rows[None] == 1)).ravel()
+    refined = Patches(corners=corners, uv=uv, surface=fronts.surface[take], reflectance=fronts.reflectance[take],
+                      emission=fronts.emission[take], is_triangle=is_triangle, grid=fronts.grid[take],
+                      split=patches.split)
+    return with_back_patches(refined, backs)
+
+
 def with_back_patches(patches: Patches, backs: np.ndarray) -> Patches:
     """`patches` followed by a back patch for every patch of a surface in the mask `backs` (S,)."""
     fronts = np.flatnonzero(backs[patches.surface])

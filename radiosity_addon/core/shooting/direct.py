@@ -89,18 +89,17 @@ def shoot_sky(res: Resources, scene: Scene, patches: Patches, elements: int, sho
 
 
 def direct_light_on_patches(res: Resources, scene: Scene, patches: Patches, visibility: str, visibility_res: int,
-                            occlusion: bool) -> tuple[np.ndarray, np.ndarray, DirectLightWork]:
-    """(P, 3) light H each patch gets at its centre from the lamps, and (P, 3) from the sky (it
-    reflects ρ · H), for the hemi-cube method's emission term: the shooting pass with one element
-    per patch."""
+                            occlusion: bool, elements: int = 1) -> tuple[np.ndarray, np.ndarray, DirectLightWork]:
+    """(P, S, S, 3) light H each element gets from the lamps, and (P, S, S, 3) from the sky (it
+    reflects ρ · H), for the hemi-cube method's emission term: the shooting pass on S x S elements."""
     with res.gpu.resources() as scoped:
-        textures = ElementTextures(scoped, patches, 1)
+        textures = ElementTextures(scoped, patches, elements)
         buffers = PatchBuffers(scoped, patches, textures)
         visibility_map = VisibilityMap(scoped, patches, visibility_res, visibility, scene.diameter)
         shooting = ShootingPass(scoped, textures, buffers, "exact", VARIANTS[visibility].search_radius,
                                 occluder_margin=VARIANTS[visibility].occluder_margin, occlusion=occlusion)
         work = shoot_lamps(scene, patches, shooting, visibility_map, occlusion)
-        lamps = textures.read_light()[:, 0, 0]
-        shoot_sky(scoped, scene, patches, 1, shooting, visibility_map, work)
-        sky = textures.read_light()[:, 0, 0] - lamps
+        lamps = textures.read_light()
+        shoot_sky(scoped, scene, patches, elements, shooting, visibility_map, work)
+        sky = textures.read_light() - lamps
     return lamps, sky, work

@@ -55,6 +55,11 @@ def element_areas(patches: Patches, elements: int) -> np.ndarray:
     return np.linalg.norm(np.cross(ds, dt), axis=-1) / elements ** 2
 
 
+def patch_means(areas: np.ndarray, elements: np.ndarray) -> np.ndarray:
+    """(P, 3) area-weighted means of element values (P, S, S, 3) with element areas (P, S, S)."""
+    return (areas[..., None] * elements).sum(axis=(1, 2)) / areas.sum(axis=(1, 2))[:, None]
+
+
 class ElementLayout:
     """Where each patch's tile lives in the two atlases."""
 
