@@ -1,11 +1,12 @@
 #version 430
-// Direct light at lightmap resolution: every texel receiver gathers the light of one shot (a
-// lamp, a sun, a piece of an emitter),
-//   H += B_shooter * F(texel point -> shooter) * V,
+// Direct light at lightmap resolution: every texel receiver gathers the light of a batch of shots
+// (lamps, suns, pieces of emitters),
+//   H += sum_k B_k * F(texel point -> shooter k) * V,
 // F and V as the shooting pass over elements computes them ("shot"). A texel carries the world
 // point its centre shows (on the patch whose UV footprint holds it), its normal and its plane.
 #include "bindings"
 #include "constants"
+#include "kernels"
 #include "shot"
 layout(local_size_x = 64) in;
 
@@ -22,8 +23,15 @@ void main() {
     if (t >= texel_count) {
         return;
     }
-    float f = shot_factor(texel_position[t].xyz, texel_normal[t].xyz, texel_plane[t], 0.0);
-    if (f > 0.0) {
-        texel_light[t] += vec4(shooter_radiosity * f, 0.0);
+    vec3 x = texel_position[t].xyz;
+    vec3 n = texel_normal[t].xyz;
+    int plane = texel_plane[t];
+    vec3 gathered = vec3(0.0);
+    for (int k = 0; k < shot_count; ++k) {
+        float f = shot_factor(k, x, n, plane, 0.0);
+        gathered += shots[k].radiosity.rgb * f;
+    }
+    if (gathered != vec3(0.0)) {
+        texel_light[t] += vec4(gathered, 0.0);
     }
 }

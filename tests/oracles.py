@@ -16,7 +16,8 @@ import math
 import numpy as np
 
 from radiosity_addon.core import Patches
-from radiosity_addon.core.shooting import ElementTextures, PatchBuffers, PatchShooters, ShootingPass, element_centers
+from radiosity_addon.core.shooting import (ElementTextures, PatchBuffers, PatchShooters, ShootingPass, ShotVisibility,
+                                           element_centers)
 from radiosity_addon.core.visibility import VARIANTS, VisibilityMap
 
 
@@ -108,28 +109,25 @@ def spot_falloff(cos_angle: np.ndarray, lamp) -> np.ndarray:
     return t * t * (3 - 2 * t)
 
 
-def visibility_misclassification(gpu, scene, patches, elements: int, resolution: int, variant: str, shooters,
-                                  search_radius=None) -> dict:
+def visibility_misclassification(gpu, scene, patches, elements: int, resolution: int, variant: str, shooters) -> dict:
     """How the GPU visibility of `variant` misclassifies receiver elements against `visible_from`, for
     shots from the patches `shooters`: fractions wrong (all, non-grazing), counts, form-factor weighted."""
     count = len(patches)
     x = element_centers(patches, elements).reshape(-1, 3)
     owner = np.repeat(np.arange(count), elements ** 2)
     normal = patches.normal[owner]
-    radius = VARIANTS[variant].search_radius if search_radius is None else search_radius
     wrong = total = false_visible = false_hidden = 0
     wrong_steep = total_steep = 0
     weight_wrong = weight_visible = 0.0
     with gpu.resources() as res:
         textures = ElementTextures(res, patches, elements)
         buffers = PatchBuffers(res, patches, textures)
-        visibility_map = VisibilityMap(res, patches, resolution, variant, scene.diameter)
-        shooting = ShootingPass(res, textures, buffers, "exact", radius, record_visibility=True,
-                                occluder_margin=VARIANTS[variant].occluder_margin)
+        shooting = ShootingPass(res, textures, buffers, "exact",
+                                ShotVisibility(res, patches, resolution, variant, scene.diameter),
+                                record_visibility=True)
         for s in shooters:
             shooter = patch_shooter(patches, s, np.zeros(3))
-            visibility_map.render(shooter.position, shooter.axes, skip_patch=s)
-            shooting.shoot(shooter, visibility_map)
+            shooting.shoot([shooter])
             seen = shooting.recorded_visibility() > 0.5
             d = x - shooter.position
             r = np.linalg.norm(d, axis=1)
@@ -150,7 +148,7 @@ def visibility_misclassification(gpu, scene, patches, elements: int, resolution:
             weight = area * cos_shooter[candidate] * cos_receiver[candidate] / (np.pi * r[candidate] ** 2 + area)
             weight_wrong += weight[bad].sum()
             weight_visible += weight[ref].sum()
-    return {"variant": variant, "search_radius": radius, "misclassified": wrong / total,
+    return {"variant": variant, "search_radius": VARIANTS[variant].search_radius, "misclassified": wrong / total,
             "false_visible": int(false_visible), "false_hidden": int(false_hidden), "candidates": int(total),
             "misclassified_non_grazing": wrong_steep / max(total_steep, 1),
             "form_factor_weighted_error": weight_wrong / weight_visible}

@@ -77,8 +77,8 @@ def test_a_cancelled_solve_releases_everything(watched, settings):
 
 
 FAILURES = {  # stage -> (settings, object and method to break)
-    "shooter selection": (PROGRESSIVE, "radiosity_addon.core.progressive.selection.Selector.select"),
-    "visibility map": (PROGRESSIVE, "radiosity_addon.core.visibility.hemisphere.VisibilityMap.render"),
+    "shooter selection": (PROGRESSIVE, "radiosity_addon.core.progressive.selection.ResidualReader.read"),
+    "visibility": (PROGRESSIVE, "radiosity_addon.core.visibility.hemicube.HemicubeAtlas.draw"),
     "shooting pass": (PROGRESSIVE, "radiosity_addon.core.shooting.shooting_pass.ShootingPass.shoot"),
     "sky hemi-cubes": (PROGRESSIVE, "radiosity_addon.core.visibility.hemicube.HemicubeRenderer.coverage"),
     "element readback": (PROGRESSIVE, "radiosity_addon.core.shooting.elements.ElementTextures.read_light"),

@@ -15,11 +15,10 @@ from scenes import CUBE_FACES, opposed_rectangles_form_factor
 
 from radiosity_addon.core import SolveSettings, load_scene, scene_from_dict, solve, subdivide
 from radiosity_addon.core.imaging import pad_tiles
-from radiosity_addon.core.progressive import Selector
+from radiosity_addon.core.progressive import BATCH_POWER_FLOOR, ResidualReader
 from radiosity_addon.core.scene.geometry import polygon_area_vector, unit
-from radiosity_addon.core.shooting import (ElementLayout, ElementTextures, PatchBuffers, ShootingPass, element_areas,
-                                           element_centers)
-from radiosity_addon.core.visibility import VisibilityMap
+from radiosity_addon.core.shooting import (ElementLayout, ElementTextures, PatchBuffers, PatchShooters, ShootingPass,
+                                           ShotVisibility, element_areas, element_centers)
 
 def cube(reflectance: float, emission: dict) -> object:
     return scene_from_dict({"surfaces": [
@@ -101,12 +100,11 @@ def test_one_shot_matches_numpy_kernel_in_element_order(gpu):
     with gpu.resources() as res:
         textures = ElementTextures(res, patches, s)
         buffers = PatchBuffers(res, patches, textures)
-        visibility_map = VisibilityMap(res, patches, 512, "search", scene.diameter)
-        shooting = ShootingPass(res, textures, buffers, "exact", 1)
+        shooting = ShootingPass(res, textures, buffers, "exact",
+                                ShotVisibility(res, patches, 512, "hemicube", scene.diameter))
         floor = list(CUBE_FACES).index("floor")
         shooter = patch_shooter(patches, floor, np.ones(3))
-        visibility_map.render(shooter.position, shooter.axes, skip_patch=floor)
-        shooting.shoot(shooter, visibility_map)
+        shooting.shoot([shooter])
         gathered = textures.read_radiosity()[..., 0] / 0.5
         residual = textures.read_residual()[..., 0]
         padded = textures.read_padded_light()
@@ -127,19 +125,56 @@ def test_one_shot_matches_numpy_kernel_in_element_order(gpu):
     assert np.allclose(padded, pad_tiles(tiles, 1), rtol=2e-3)
 
 
-def test_selection_picks_largest_unshot_power_from_the_mipmap(gpu):
+def test_selection_takes_the_strongest_patches_from_the_mipmap(gpu):
+    """The residual read back gives each patch's mean unshot radiosity and power; a batch is the
+    strongest patches, strongest first, down to BATCH_POWER_FLOOR of the strongest."""
     scene = load_scene("cornell-box")
     patches = subdivide(scene, 2)
     patches.emission[:] = np.random.default_rng(1).uniform(0, 1, patches.emission.shape)
     with gpu.resources() as res:
         textures = ElementTextures(res, patches, 4)
-        selector = Selector(res, textures, PatchBuffers(res, patches, textures))
-        selection = selector.select()
-    power = patches.area[:, None] * patches.emission
-    assert selection.patch == int(np.argmax(power.sum(axis=1)))
-    assert np.allclose(selection.residual, patches.emission[selection.patch], rtol=1e-5)
-    assert np.allclose(selection.unshot, power.sum(axis=0), rtol=1e-5)
-    assert ElementLayout(len(patches), 4).level == 2
+        residuals = ResidualReader(textures, patches.area).read()
+    power = (patches.area[:, None] * patches.emission).sum(axis=1)
+    assert np.allclose(residuals.mean, patches.emission, rtol=1e-5)
+    assert np.allclose(residuals.power, power, rtol=1e-5)
+    # uniform emission: the power centroid is the area centroid of the four quadrants
+    quadrants = element_areas(patches, 4).reshape(-1, 2, 2, 2, 2).sum(axis=(2, 4))  # [p, t half, s half]
+    centre = np.array([0.25, 0.75])
+    expected_s = (quadrants * centre[None, None, :]).sum(axis=(1, 2)) / quadrants.sum(axis=(1, 2))
+    expected_t = (quadrants * centre[None, :, None]).sum(axis=(1, 2)) / quadrants.sum(axis=(1, 2))
+    assert np.allclose(residuals.centroid, np.stack([expected_s, expected_t], axis=1), atol=1e-5)
+    order = np.argsort(-power)
+    batch = residuals.strongest(16)
+    expected = order[:16][power[order[:16]] >= BATCH_POWER_FLOOR * power.max()]
+    assert batch.tolist() == expected.tolist()
+    assert len(residuals.strongest(16, floor=0.9)) < len(batch)
+
+
+def test_a_batch_of_shots_adds_what_each_adds_alone(gpu):
+    """Several shooters in one pass (hemi-cubes in one atlas): the light is the sum of their
+    single shots', each shooter's residual cleared, each shot's energy sums its own."""
+    scene = load_scene("cornell-box")
+    patches = subdivide(scene, 2)
+    shooters = PatchShooters(patches)
+    picks = [3, 17, 40, 55]
+
+    def shoot(indices):
+        with gpu.resources() as res:
+            textures = ElementTextures(res, patches, 2)
+            shooting = ShootingPass(res, textures, PatchBuffers(res, patches, textures), "exact",
+                                    ShotVisibility(res, patches, 256, "hemicube", scene.diameter))
+            shooting.shoot([shooters.shooter(i, np.ones(3)) for i in indices])
+            return textures.read_light(), textures.read_residual(), shooting.read_energy(len(indices))
+
+    alone = [shoot([i]) for i in picks]
+    light, residual, energy = shoot(picks)
+    assert np.allclose(light, sum(a[0] for a in alone), rtol=1e-5, atol=1e-7)
+    assert np.allclose(energy, np.concatenate([a[2] for a in alone]), rtol=1e-6, atol=1e-8)
+    assert np.all(energy[:, 0] > 0.2)  # each shot's own hit fraction
+    for i in picks:
+        assert np.all(residual[i] >= 0)
+        received = patches.reflectance[i] * light[i]
+        assert np.allclose(residual[i], received, rtol=1e-4, atol=1e-7)  # own emission cleared, the rest kept
 
 
 def test_furnace_exact_kernel_within_2_percent(gpu):
@@ -182,7 +217,7 @@ def test_unshot_power_decreases_monotonically_and_progress_is_physical(lit_cube)
     _, solution, calls = lit_cube
     unshot = np.array([details["unshot_fraction"] for _, details in calls])
     fractions = np.array([fraction for fraction, _ in calls])
-    assert len(unshot) == solution.report.details.shots + 1
+    assert len(unshot) == solution.report.details.work.batches + 1  # one call per batch of shots, and the last
     assert unshot[0] == pytest.approx(1.0, rel=1e-6) and unshot[-1] <= 1e-3
     assert np.all(np.diff(unshot) <= 1e-7)
     assert np.all(np.diff(fractions) >= -1e-7) and fractions[-1] == pytest.approx(1 - unshot[-1])
@@ -222,8 +257,10 @@ def test_visibility_search_misclassifies_fewer_elements_than_plain(gpu):
     plain = visibility_misclassification(gpu, scene, patches, 2, 512, "plain", shooters)
     tessellated = visibility_misclassification(gpu, scene, patches, 2, 512, "tessellated", shooters)
     search = visibility_misclassification(gpu, scene, patches, 2, 512, "search", shooters)
+    hemicube = visibility_misclassification(gpu, scene, patches, 2, 512, "hemicube", shooters)
     assert search["misclassified"] < tessellated["misclassified"] < plain["misclassified"]
     assert search["misclassified_non_grazing"] < 0.03
+    assert hemicube["misclassified_non_grazing"] < 0.03
     guarded = visibility_misclassification(gpu, scene, patches, 2, 512, "guarded", shooters)
     assert guarded["false_visible"] < search["false_visible"]  # fewer leaks past occluders
 
@@ -286,7 +323,7 @@ def test_preview_snapshots_carry_the_ambient_term_and_converge_to_the_result(gpu
     snapshots = []
     solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-4), gpu=gpu,
                      preview=snapshots.append, preview_interval=0.0)
-    assert len(snapshots) >= solution.report.shots  # every shot, with interval 0
+    assert len(snapshots) >= solution.report.details.work.batches  # every batch of shots, with interval 0
     area = solution.patches.area
     final = (area * solution.patch_radiosity[:, 0]).sum()
     first, last = ((area * s.patch_radiosity[:, 0]).sum() for s in (snapshots[0], snapshots[-1]))

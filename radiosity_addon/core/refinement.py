@@ -6,10 +6,11 @@ smooth regions stay coarse.
 The estimate is measured, not guessed: the direct light (lamps and emitters, the few shots that
 light a scene first) is shot into S x S elements per patch, and a patch whose elements' light
 spreads more than `refine_threshold` of its mean (plus a floor of REFINE_FLOOR of the scene's
-mean, so dim corners are not split for noise) is split; that is repeated `refinements` times,
-then the method solves once on the refined patches. Steep direct light is where the indirect
-light is steep too (the cavity between an emitter and a ceiling, contact shadows), and the
-direct shots cost little next to the solve.
+mean, so dim corners are not split for noise) is split — if another surface faces it from closer
+than its own size, where its light, sent as if uniform, lands wrong (a patch far from everything
+is a good enough shooter whatever its spread; the lightmaps recompute the direct light per
+texel). That is repeated `refinements` times, then the method solves once on the refined patches.
+The direct shots cost little next to the solve.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 
 from .progressive import solve_progressive
 from .scene import Patches, split_patches
+from .scene.neighbours import near_pairs
 from .timing import StageTimer
 from .uvspace import patch_material_values
 
@@ -25,15 +27,33 @@ REFINE_FLOOR = 0.05
 PROBE_ELEMENTS = 4  # elements per patch side the direct light is measured on
 
 
+def faced_closely(patches: Patches, candidates: np.ndarray) -> np.ndarray:
+    """(len(candidates),) bool: a patch of another surface faces the candidate (both fronts towards
+    each other) with its bounding sphere closer to the candidate's centre than twice its size."""
+    centre, normal = patches.center, patches.normal
+    radius = np.linalg.norm(patches.corners - centre[:, None], axis=2).max(axis=1)
+    near = np.zeros(len(candidates), dtype=bool)
+    for query, other in near_pairs(centre, radius, candidates, 2 * radius[candidates]):
+        rows = candidates[query]
+        offset = centre[other] - centre[rows]  # candidate -> other
+        facing = (np.einsum("nd,nd->n", offset, normal[rows]) > 0) & (np.einsum("nd,nd->n", offset, normal[other]) < 0)
+        close = facing & (patches.surface[other] != patches.surface[rows])
+        near[query[close]] = True
+    return near
+
+
 def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: float, min_size: float) -> np.ndarray:
     """(P,) bool: patches whose elements' light spreads more than `threshold` of their mean (plus
-    the floor) and that are still larger than `min_size` across."""
+    the floor), that another surface faces closely, and that are still larger than `min_size`."""
     light = np.asarray(element_light, dtype=np.float64).sum(axis=-1)  # (P, S, S)
     mean = light.mean(axis=(1, 2))
     area = patches.area
     floor = REFINE_FLOOR * float((area * mean).sum() / area.sum())
     spread = light.max(axis=(1, 2)) - light.min(axis=(1, 2))
-    return (spread > threshold * (mean + floor)) & (np.sqrt(area) > min_size)
+    split = (spread > threshold * (mean + floor)) & (np.sqrt(area) > min_size)
+    candidates = np.flatnonzero(split)
+    split[candidates] = faced_closely(patches, candidates)
+    return split
 
 
 def refine(gpu, scene, patches: Patches, backs, settings, effects, timer) -> tuple[Patches, list[int]]:

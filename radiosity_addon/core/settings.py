@@ -10,7 +10,7 @@ from .errors import SolveError
 
 METHODS = ("progressive", "hemicube")  # progressive refinement, or the hemi-cube method (the original)
 SOLVERS = ("jacobi-gpu", "jacobi-cpu", "gauss-seidel")  # linear solvers of the hemi-cube method
-VISIBILITY_VARIANTS = ("plain", "tessellated", "search", "guarded")  # visibility.hemisphere.VARIANTS
+VISIBILITY_VARIANTS = ("hemicube", "plain", "tessellated", "search", "guarded")  # visibility.hemisphere.VARIANTS
 KERNELS = ("exact", "disk")
 SHOOTING_POINTS = ("centroid", "centre")
 DEFAULT_TOLERANCE = {"progressive": 1e-3, "hemicube": 1e-5}
@@ -36,9 +36,10 @@ class SolveSettings:
     tolerance: float | None = None  # None: the method's default
     max_iterations: int = 100_000  # linear solvers
     max_shots: int | None = None  # progressive; None: as many as the tolerance needs
-    visibility: str = "search"  # progressive: plain | tessellated | search | guarded
+    visibility: str = "hemicube"  # progressive: hemicube (batched) | plain | tessellated | search | guarded
     kernel: str = "exact"  # progressive: exact | disk
-    visibility_res: int = 512  # progressive: pixels across the hemispherical visibility map
+    visibility_res: int = 512  # progressive: pixels across a visibility map (a hemi-cube's unfolded cross)
+    batch_shots: int = 32  # progressive: shooters per pass at most (hemi-cube visibility)
     shoot_from: str = "centroid"  # progressive: visibility map from the unshot power's centroid | centre
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
     skip_unneeded: bool = True  # simulate only the effects the scene calls for (scene.analysis)
@@ -71,6 +72,8 @@ class SolveSettings:
             raise SolveError("visibility map resolution must lie between 16 and 8192 pixels")
         if not 0 < self.effective_tolerance < 1:
             raise SolveError("tolerance must lie between 0 and 1")
+        if not 1 <= self.batch_shots <= 64:
+            raise SolveError("shooters per pass must lie between 1 and 64")
         if not 0 <= self.refinements <= 8 or not self.refine_threshold > 0:
             raise SolveError("refinements must lie between 0 and 8, the refine threshold above 0")
 

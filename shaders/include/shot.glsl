@@ -1,149 +1,147 @@
-// One shot's geometry and the light it sends to a receiving point x with normal n on the plane
-// `plane` (a surface side: patches of one plane cannot hide each other's points).
-// Shared by the shooting pass over elements and the one over lightmap texels.
+// A batch of shots, and the light each sends to a receiving point x with normal n on the plane
+// `plane` (a surface side: the patches of one plane cannot hide each other's points). Needs
+// "bindings", "constants" and "kernels"; shared by the shooting passes over elements and over
+// lightmap texels, which loop over the batch (shooting.shots writes the records).
 //
-// Defines: KERNEL_EXACT (1: Lambert's exact polygon factor, 0: the disk approximation),
-// SEARCH_RADIUS, OCCLUDER_MARGIN, OCCLUSION (0: nothing occludes, V = 1 for facing receivers).
-// Kinds (shooter_kind): a polygon (a patch, an emitter piece, an area lamp piece) gives the form
-// factor to it; a point lamp F = cos_recv / (pi r^2) times its spot falloff (shooter_radiosity:
-// its radiant intensity); a sun F = cos_recv / pi (shooter_radiosity: its irradiance), looked up
-// in an orthographic item buffer; the sky F = a receiver's sky fraction (given by the caller).
+// Kinds: 0 a polygon (a patch, a piece of an emitter or of an area lamp): F = Lambert's exact
+// point-to-polygon factor (KERNEL_EXACT 1) or the disk approximation; 1 a point lamp:
+// F = cos_recv / (pi r^2) times its spot cone (radiosity: its intensity); 2 a sun: F = cos_recv / pi
+// (radiosity: its irradiance); 3 the sky: F = the receiver's sky fraction (given by the caller).
+// Visibility: a shot with a hemi-cube slot >= 0 looks the receiver up in its tile of the hemi-cube
+// atlas (visibility.HemicubeAtlas); slot -1 in the one visibility map bound (hemispherical, or
+// orthographic for a sun: visibility.VisibilityMap). Either way the receiver's patch, or any patch
+// of its plane, must show at its direction, or within SEARCH_RADIUS pixels (dissertation
+// Algorithm 8). OCCLUSION 0: the scene analysis proved nothing occludes.
+//
+// Defines: MAX_SHOTS, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN (the map's guard), OCCLUSION.
 
-layout(binding = TEXTURE_ITEM_BUFFER) uniform usampler2D item_buffer;
-layout(binding = TEXTURE_DISTANCE_MAP) uniform sampler2D distance_map;  // distance from the eye of what each item texel shows (0: nothing)
+struct Shot {
+    vec4 eye_area;        // the visibility eye, the polygon's area
+    vec4 axis_x_kind;     // the eye's frame: x, and the kind
+    vec4 axis_y_patch;    // y, and the patch shot (-1: none)
+    vec4 normal_keeps;    // the pole (a polygon's normal), 1 when the patch keeps the rest of its residual
+    vec4 corner[4];       // the polygon, counter-clockwise seen from its front
+    vec4 radiosity;       // what it shoots
+    vec4 spot;            // the lamp's axis or the sun's travel direction, cos of half the cone (-2: none)
+    vec4 extra;           // the cone's soft width, the hemi-cube slot (-1: the map), the sun map's half-width
+};
+
+layout(std140, binding = UNIFORM_SHOTS) uniform Shots { Shot shots[MAX_SHOTS]; };
 layout(std430, binding = STORAGE_PATCH_PLANE) readonly buffer Plane { int plane_of[]; };
+layout(binding = TEXTURE_HEMICUBES) uniform usampler2D hemicubes;
+layout(binding = TEXTURE_ITEM_BUFFER) uniform usampler2D item_buffer;
+layout(binding = TEXTURE_DISTANCE_MAP) uniform sampler2D distance_map;  // distance of what each map texel shows (0: nothing)
 
+uniform int shot_count;
+uniform int hemicube_resolution;
+uniform int hemicube_tiles_per_row;
 uniform int item_resolution;
-uniform int shooter_patch;          // its residual is cleared; -1: not a patch
-uniform vec3 shooter_position;      // eye of the visibility map
-uniform vec3 shooter_axis_x;
-uniform vec3 shooter_axis_y;
-uniform vec3 shooter_normal;
-uniform vec3 shooter_polygon[4];    // corners, counter-clockwise from the front
-uniform float shooter_area;
-uniform vec3 shooter_radiosity;     // unshot radiosity being shot
-uniform int shooter_kind;           // 0: patch polygon, 1: point lamp, 2: directional (sun), 3: sky
-uniform vec3 light_direction;       // spot axis, or the sun's travel direction
-uniform float spot_cos_half;        // cosine of half the spot cone (-1: all around)
-uniform float spot_smooth;          // (1 - spot_cos_half) * blend: width of the soft edge
-uniform float ortho_extent;         // > 0: the item buffer is orthographic over this half-width
 
-float visibility(vec3 x, vec3 n, int plane) {
-    vec3 d = x - shooter_position;
-    if (dot(n, d) >= 0.0) {
-        return 0.0;  // the receiver turns its back to the shooter
+bool on_plane(uint item, int plane) {
+    return item != 0u && int(item) - 1 < plane_of.length() && plane_of[int(item) - 1] == plane;
+}
+
+// Is the receiver's plane seen in direction q (the eye's frame: x, y, pole; q.z > 0) in hemi-cube
+// `slot`? The tile is laid out as visibility.hemicube.face_instances lays out the five faces: top
+// rows [0, R), then the +x, -x, +y, -y half faces of R/2 rows each. The search stays in one face.
+bool hemicube_sees(int slot, vec3 q, int plane) {
+    int r = hemicube_resolution;
+    vec3 aq = abs(q);
+    float a, b, c, up_min;
+    int row0, rows;
+    if (q.z >= aq.x && q.z >= aq.y) {
+        a = q.x; b = q.y; c = q.z; row0 = 0; rows = r; up_min = -1.0;
+    } else {
+        rows = r / 2;
+        up_min = 0.0;
+        b = q.z;
+        if (aq.x >= aq.y) {
+            a = q.x > 0.0 ? q.y : -q.y;
+            c = aq.x;
+            row0 = q.x > 0.0 ? r : r + r / 2;
+        } else {
+            a = q.y > 0.0 ? -q.x : q.x;
+            c = aq.y;
+            row0 = q.y > 0.0 ? 2 * r : 2 * r + r / 2;
+        }
     }
-    vec3 q = vec3(dot(d, shooter_axis_x), dot(d, shooter_axis_y), dot(d, shooter_normal));
-    if (q.z <= 0.0) {
-        return 0.0;  // behind the shooter
+    ivec2 pixel = ivec2(floor(vec2(0.5 * (a / c + 1.0) * float(r), (b / c - up_min) / (1.0 - up_min) * float(rows))));
+    ivec2 origin = ivec2(slot % hemicube_tiles_per_row, slot / hemicube_tiles_per_row) * ivec2(r, 3 * r)
+                 + ivec2(0, row0);
+    bool found = false;
+    for (int dy = -SEARCH_RADIUS; dy <= SEARCH_RADIUS; ++dy) {
+        for (int dx = -SEARCH_RADIUS; dx <= SEARCH_RADIUS; ++dx) {
+            ivec2 at = clamp(pixel + ivec2(dx, dy), ivec2(0), ivec2(r - 1, rows - 1));
+            found = found || on_plane(texelFetch(hemicubes, origin + at, 0).r, plane);
+        }
     }
-#if !OCCLUSION
-    return 1.0;
-#endif
+    return found;
+}
+
+// Is the receiver's plane seen at q in the visibility map (hemispherical: (x, y) / |q|;
+// orthographic over the half-width `ortho_extent` > 0)?
+bool map_sees(vec3 q, int plane, float ortho_extent) {
     float r = length(q);
     vec2 uv = (ortho_extent > 0.0 ? q.xy / ortho_extent : q.xy / r) * 0.5 + 0.5;
     ivec2 texel = clamp(ivec2(floor(uv * float(item_resolution))), ivec2(0), ivec2(item_resolution - 1));
-    // A planar surface cannot hide its own points, so any patch of the receiver's plane
-    // seen there counts (patch borders inside a surface are then no obstacle).
-    uint centre = texelFetch(item_buffer, texel, 0).r;
-    if (centre != 0u && plane_of[int(centre) - 1] == plane) {
-        return 1.0;
+    if (on_plane(texelFetch(item_buffer, texel, 0).r, plane)) {
+        return true;
     }
-    // Optionally (OCCLUDER_MARGIN >= 0) the search is for rasterization gaps only, not
-    // for peeking past occluders: when the own texel shows something clearly nearer,
-    // the receiver is hidden.
-    if (ortho_extent > 0.0) {
-        r = q.z;  // the orthographic map's distances run along its axis
-    }
+    // Optionally (OCCLUDER_MARGIN >= 0) the search is for rasterization gaps only, not for
+    // peeking past occluders: when the own texel shows something clearly nearer, it is hidden.
     float seen = texelFetch(distance_map, texel, 0).r;
-    if (OCCLUDER_MARGIN >= 0.0 && seen > 0.0 && seen < r * (1.0 - OCCLUDER_MARGIN)) {
-        return 0.0;
+    float distance = ortho_extent > 0.0 ? q.z : r;  // the orthographic map's distances run along its axis
+    if (OCCLUDER_MARGIN >= 0.0 && seen > 0.0 && seen < distance * (1.0 - OCCLUDER_MARGIN)) {
+        return false;
     }
     bool found = false;
     for (int dy = -SEARCH_RADIUS; dy <= SEARCH_RADIUS; ++dy) {
         for (int dx = -SEARCH_RADIUS; dx <= SEARCH_RADIUS; ++dx) {
             ivec2 at = clamp(texel + ivec2(dx, dy), ivec2(0), ivec2(item_resolution - 1));
-            uint item = texelFetch(item_buffer, at, 0).r;
-            found = found || (item != 0u && plane_of[int(item) - 1] == plane);
+            found = found || on_plane(texelFetch(item_buffer, at, 0).r, plane);
         }
     }
-    return found ? 1.0 : 0.0;
+    return found;
 }
 
-// Lambert's contour integral: F = 1/(2 pi) sum_k angle_k (n . unit(r_k x r_k+1)),
-// the polygon first clipped to the receiver's front half-space.
-float polygon_form_factor(vec3 x, vec3 n) {
-    vec3 poly[5];
-    int count = 0;
-    for (int k = 0; k < 4; ++k) {
-        vec3 a = shooter_polygon[k] - x;
-        vec3 b = shooter_polygon[(k + 1) % 4] - x;
-        float da = dot(a, n);
-        float db = dot(b, n);
-        if (da >= 0.0) {
-            poly[count++] = a;
-        }
-        if ((da >= 0.0) != (db >= 0.0)) {
-            poly[count++] = a + (b - a) * (da / (da - db));
-        }
+// Does shot k see the point x (normal n, on `plane`)? Not for the sky (kind 3).
+bool shot_sees(int k, vec3 x, vec3 n, int plane) {
+    int kind = int(shots[k].axis_x_kind.w);
+    vec3 d = x - shots[k].eye_area.xyz;
+    if (kind == 2 ? dot(n, shots[k].spot.xyz) >= 0.0 : dot(n, d) >= 0.0) {
+        return false;  // the receiver turns its back to the shooter (the sun lights its other side)
     }
-    float sum = 0.0;
-    for (int k = 0; k < count; ++k) {
-        vec3 a = poly[k];
-        vec3 b = poly[(k + 1) % count];
-        float la = length(a);
-        float lb = length(b);
-        if (la < 1e-20 || lb < 1e-20) {
-            continue;
-        }
-        vec3 c = cross(a / la, b / lb);
-        float lc = length(c);
-        if (lc > 1e-12) {
-            sum += atan(lc, dot(a, b) / (la * lb)) * dot(n, c) / lc;
-        }
+    vec3 q = vec3(dot(d, shots[k].axis_x_kind.xyz), dot(d, shots[k].axis_y_patch.xyz), dot(d, shots[k].normal_keeps.xyz));
+    if (q.z <= 0.0) {
+        return false;  // behind the shooter
     }
-    // the shooter's corners run counter-clockwise seen from its front, i.e.
-    // clockwise seen from a receiver in front of it: the sum is negative
-    return max(-sum, 0.0) / (2.0 * PI);
+#if !OCCLUSION
+    return true;
+#endif
+    int slot = int(shots[k].extra.y);
+    return slot >= 0 ? hemicube_sees(slot, q, plane) : map_sees(q, plane, shots[k].extra.z);
 }
 
-// A point lamp: irradiance I cos / r^2, so the radiance-equivalent factor is cos / (pi r^2).
-float point_lamp_factor(vec3 x, vec3 n) {
-    vec3 d = x - shooter_position;
-    float r2 = dot(d, d);
-    vec3 u = d / sqrt(r2);
-    float t = spot_smooth > 0.0 ? clamp((dot(u, light_direction) - spot_cos_half) / spot_smooth, 0.0, 1.0)
-                                : float(dot(u, light_direction) > spot_cos_half);
-    return max(-dot(n, u), 0.0) * t * t * (3.0 - 2.0 * t) / (PI * r2);
-}
-
-float disk_form_factor(vec3 x, vec3 n) {
-    vec3 d = shooter_position - x;
-    float r2 = dot(d, d);
-    float r = sqrt(r2);
-    float cos_receiver = max(dot(n, d), 0.0) / r;
-    float cos_shooter = max(-dot(shooter_normal, d), 0.0) / r;
-    return shooter_area * cos_receiver * cos_shooter / (PI * r2 + shooter_area);
-}
-
-// F (the kernel) times V (the visibility map) of the shot at x; `sky` is the receiver's sky
-// fraction (kind 3, whose visibility is in it already).
-float shot_factor(vec3 x, vec3 n, int plane, float sky) {
-    if (shooter_kind == 3) {
+// F times V of shot k at x; `sky` is the receiver's sky fraction (kind 3: its visibility is in it).
+float shot_factor(int k, vec3 x, vec3 n, int plane, float sky) {
+    int kind = int(shots[k].axis_x_kind.w);
+    if (kind == 3) {
         return sky;
     }
-    if (visibility(x, n, plane) <= 0.0) {
+    if (!shot_sees(k, x, n, plane)) {
         return 0.0;
     }
-    if (shooter_kind == 1) {
-        return point_lamp_factor(x, n);
+    if (kind == 1) {
+        return point_lamp_factor(shots[k].eye_area.xyz, shots[k].spot.xyz, shots[k].spot.w, shots[k].extra.x, x, n);
     }
-    if (shooter_kind == 2) {
-        return max(-dot(n, light_direction), 0.0) / PI;
+    if (kind == 2) {
+        return max(-dot(n, shots[k].spot.xyz), 0.0) / PI;
     }
 #if KERNEL_EXACT
-    return polygon_form_factor(x, n);
+    vec3 polygon[4] = vec3[4](shots[k].corner[0].xyz, shots[k].corner[1].xyz, shots[k].corner[2].xyz,
+                              shots[k].corner[3].xyz);
+    return polygon_form_factor(polygon, x, n);
 #else
-    return disk_form_factor(x, n);
+    return disk_form_factor(shots[k].eye_area.xyz, shots[k].normal_keeps.xyz, shots[k].eye_area.w, x, n);
 #endif
 }

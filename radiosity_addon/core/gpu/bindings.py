@@ -1,7 +1,8 @@
 """Binding points and fixed-point scales shared by Python and GLSL, by name.
 
-Shaders `#include "bindings"` and use `STORAGE_<NAME>`, `TEXTURE_<NAME>`, `IMAGE_<NAME>` and the
-scales below; Python binds through `storage(name)`, `texture_unit(name)`, `image_unit(name)`.
+Shaders `#include "bindings"` and use `STORAGE_<NAME>`, `TEXTURE_<NAME>`, `IMAGE_<NAME>`, `UNIFORM_<NAME>` and the
+scales below; Python binds through `storage(name)`, `texture_unit(name)`, `image_unit(name)`,
+`uniform_block(name)`.
 Numbers are unique within each group (the shaders of one pass); groups may reuse them, which
 keeps every pass within OpenGL 4.3's guaranteed 8 storage-buffer bindings.
 """
@@ -13,7 +14,6 @@ STORAGE_GROUPS = {
         "PATCH_CORNERS": 0, "PATCH_NORMAL_AREA": 1, "PATCH_REFLECTANCE": 2, "ELEMENT_WEIGHTS": 3,
         "SHOT_ENERGY": 4, "RECORDED_VISIBILITY": 5, "PATCH_PLANE": 6, "SKY_FRACTION": 7,
     },
-    "selection": {"PATCH_NORMAL_AREA": 1, "SHOT_ENERGY": 4, "SELECTION": 6},  # the next shooter
     "texels": {"TEXEL_POSITION": 0, "TEXEL_NORMAL": 1, "TEXEL_PLANE": 2, "TEXEL_LIGHT": 3,
                "PATCH_PLANE": 6},  # direct light into lightmap texels
     "hemicube": {"DELTA_FORM_FACTORS": 1, "FORM_FACTOR_ROWS": 2},
@@ -22,7 +22,8 @@ STORAGE_GROUPS = {
     "lightmap": {"LATTICE_CORNERS": 0, "LATTICE_VALUES": 1},
     "preview": {"SURFACE_REFLECTANCE": 0, "SURFACE_EMISSION": 1},
 }
-TEXTURE_UNITS = {"ITEM_BUFFER": 0, "DISTANCE_MAP": 1, "RESIDUAL": 2, "LIGHTMAP": 0}
+TEXTURE_UNITS = {"ITEM_BUFFER": 0, "DISTANCE_MAP": 1, "RESIDUAL": 2, "HEMICUBES": 3, "LIGHTMAP": 0}
+UNIFORM_BLOCKS = {"SHOTS": 0}  # a batch of shot records (shooting.shots)
 IMAGE_UNITS = {"LIGHT": 0, "RESIDUAL": 1}
 
 SHOT_ENERGY_ONE = 1 << 30  # the shooting pass sums hit fractions in fixed point: 2^30 = 1
@@ -44,11 +45,16 @@ def image_unit(name: str) -> int:
     return IMAGE_UNITS[name]
 
 
+def uniform_block(name: str) -> int:
+    return UNIFORM_BLOCKS[name]
+
+
 def glsl() -> str:
     """The `bindings` include."""
     lines = [f"#define STORAGE_{name} {slot}" for name, slot in STORAGE.items()]
     lines += [f"#define TEXTURE_{name} {unit}" for name, unit in TEXTURE_UNITS.items()]
     lines += [f"#define IMAGE_{name} {unit}" for name, unit in IMAGE_UNITS.items()]
+    lines += [f"#define UNIFORM_{name} {unit}" for name, unit in UNIFORM_BLOCKS.items()]
     lines += [f"const float SHOT_ENERGY_ONE = {float(SHOT_ENERGY_ONE)};",
               f"const float FORM_FACTOR_ONE = {float(FORM_FACTOR_ONE)};"]
     return "\n".join(lines) + "\n"

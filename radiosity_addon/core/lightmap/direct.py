@@ -15,9 +15,8 @@ from ..gpu import GPU
 from ..scene import Patches, Scene
 from ..scene.geometry import bilinear
 from ..settings import VISIBILITY_VARIANTS
-from ..shooting import TexelReceivers, direct_shooters, shoot_each
+from ..shooting import ShotVisibility, TexelReceivers, direct_shooters
 from ..uvspace import rasterize
-from ..visibility import VARIANTS, VisibilityMap
 
 
 def texel_points(gpu: GPU, patches: Patches, rows: np.ndarray, corners_texels: np.ndarray, size) -> tuple:
@@ -39,10 +38,9 @@ def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, o
     shooters = direct_shooters(scene, patches)
     if not shooters or len(points) == 0:
         return np.zeros((len(points), 3)), 0
-    variant = VARIANTS[visibility if visibility in VISIBILITY_VARIANTS else "search"]
+    variant = visibility if visibility in VISIBILITY_VARIANTS else "hemicube"
     with gpu.resources() as res:
-        receivers = TexelReceivers(res, patches, points, patches.normal[owners], patches.plane[owners], "exact",
-                                   variant.search_radius, variant.occluder_margin, occlusion)
-        visibility_map = VisibilityMap(res, patches, resolution, visibility, scene.diameter)
-        shoot_each(shooters, receivers, visibility_map, patches.drawn, occlusion)
+        shots = ShotVisibility(res, patches, resolution, variant, scene.diameter, occlusion)
+        receivers = TexelReceivers(res, patches, points, patches.normal[owners], patches.plane[owners], "exact", shots)
+        receivers.shoot_all(shooters)
         return receivers.read_light(), len(shooters)

@@ -29,17 +29,18 @@ class EnergyLedger:
         self.pending = None  # power of the shot whose fractions are not yet read back
 
     def settle(self, fractions: np.ndarray) -> None:
-        """Book the pending shot with its (hit, reflected RGB) fractions."""
+        """Book the pending shots ((K, 3) powers) with their (K, 4) (hit, reflected RGB) fractions."""
         if self.pending is None:
             return
-        power, self.pending = self.pending, None
-        hit = float(fractions[0])
-        reflected = np.minimum(fractions[1:4], hit)
-        self.shot += power
-        self.reflected += reflected * power
-        self.absorbed += (hit - reflected) * power
-        self.escaped += max(1.0 - hit, 0.0) * power
-        self.surplus += max(hit - 1.0, 0.0) * power
+        power, self.pending = np.atleast_2d(self.pending), None
+        fractions = np.atleast_2d(fractions)
+        hit = fractions[:, :1]
+        reflected = np.minimum(fractions[:, 1:4], hit)
+        self.shot += power.sum(axis=0)
+        self.reflected += (reflected * power).sum(axis=0)
+        self.absorbed += ((hit - reflected) * power).sum(axis=0)
+        self.escaped += (np.maximum(1.0 - hit, 0.0) * power).sum(axis=0)
+        self.surplus += (np.maximum(hit - 1.0, 0.0) * power).sum(axis=0)
 
     @property
     def unshot(self) -> np.ndarray:

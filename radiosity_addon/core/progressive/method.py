@@ -1,14 +1,15 @@
 """Progressive refinement radiosity on the GPU (dissertation §4.2; Coombe et al. 2004).
 
-Per shot: select the patch of largest unshot power (residual mip, GPU reduction), render its
-hemispherical visibility map, add ΔB to every receiving element, clear its residual, rebuild
-the residual's mip levels. Stops when the unshot power falls under tolerance × emitted power,
-or at the shot budget.
+Per batch: read the residual's mip level (each patch's unshot power), take the strongest patches
+(up to the visibility's capacity, down to `selection.BATCH_POWER_FLOOR` of the strongest), render
+their visibility (hemi-cubes in one atlas, one instanced draw), add their ΔB to every receiving
+element in one dispatch, clear their residuals, rebuild the residual's mip levels. Emitters first
+shoot their own emission (the direct light the lightmaps recompute per texel). Stops when the
+unshot power falls under tolerance × emitted power, or at the shot budget.
 
-Energy is booked in float64 on the CPU from the few numbers read back per shot (see
+Energy is booked in float64 on the CPU from the few numbers read back per batch (see
 `selection.READBACK`): each shot's power comes from the shooter's mean residual, and the GPU
-sums (fixed point, exact to ~1e-9 per work group) say which fraction of it hit a receiver and
-which fraction was reflected.
+sums (fixed point) say which fraction of it hit a receiver and which fraction was reflected.
 """
 
 from __future__ import annotations
@@ -22,12 +23,12 @@ from ..errors import SolveCancelled
 from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
-from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchShooters, ShootingPass, patch_means,
-                        shoot_lamps, shoot_sky)
+from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchShooters, ShootingPass, ShotVisibility,
+                        patch_means, shoot_lamps, shoot_sky)
 from ..timing import StageTimer
-from ..visibility import VARIANTS, VisibilityMap
+from ..visibility import VARIANTS
 from .ledger import EnergyLedger, ambient_term, time_left
-from .selection import READBACK, Selector
+from .selection import READBACK, ResidualReader
 
 
 @dataclass
@@ -35,6 +36,7 @@ class ProgressiveWork:
     """What progressive refinement ran (the report's `effects`, with the scene analysis)."""
     visibility_maps: int
     shots: int
+    batches: int
     channels_solved: int
     texel_bytes: int
     residual_updates: bool
@@ -88,29 +90,29 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
     ledger = EnergyLedger(emitted)
     ambient = ambient_term(patches)
     shooters = PatchShooters(patches)
-    drawn = patches.drawn
     with gpu.resources() as res:
         with timer.stage("setup"):
             textures = ElementTextures(res, patches, settings.elements, channels=effects.channels)
             buffers = PatchBuffers(res, patches, textures)
-            selector = Selector(res, textures, buffers)
-            visibility_map = VisibilityMap(res, patches, settings.visibility_res, settings.visibility, scene.diameter)
-            shooting = ShootingPass(res, textures, buffers, settings.kernel, variant.search_radius,
-                                    occluder_margin=variant.occluder_margin, occlusion=effects.occlusion,
+            visibility = ShotVisibility(res, patches, settings.visibility_res, settings.visibility, scene.diameter,
+                                        effects.occlusion, capacity=settings.batch_shots)
+            shooting = ShootingPass(res, textures, buffers, settings.kernel, visibility,
                                     interreflection=effects.interreflection)
+            reader = ResidualReader(textures, patches.area)
         with timer.stage("direct_light"):
-            direct = shoot_lamps(scene, patches, shooting, visibility_map, effects.occlusion)
+            direct = shoot_lamps(scene, shooting)
             lamp_light = textures.read_light()
-            shoot_sky(res, scene, patches, settings.elements, shooting, visibility_map, direct)
+            shoot_sky(res, scene, patches, settings.elements, shooting, direct)
             before_emitters = textures.read_light()
+            shooting.read_energy(1)  # the lamps' sums: lamps are booked by their first bounce below
             textures.build_mipmaps()
-            first = selector.select()  # also drops the lamp shots' energy sums: they are booked here
+            first = reader.read()
         # lamps and the sky enter the ledger as the power their first bounce adds to the unshot
         lamp_first_bounce = np.maximum(first.unshot - emitted, 0.0)
         ledger.emitted = ledger.emitted + lamp_first_bounce
         emitted_total = float(ledger.emitted.sum())
 
-        shots = 0
+        shots = batches = 0
         history = []  # (elapsed, unshot fraction) for the estimate of time left
         last_preview = time.perf_counter()
         unshot_gpu = emitted.copy()
@@ -124,9 +126,8 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
             with timer.stage("select"):
-                selection = selector.select()
-            ledger.settle(selection.last_shot)
-            unshot_gpu = selection.unshot
+                residuals = reader.read()
+            unshot_gpu = residuals.unshot
             fraction_left = float(unshot_gpu.sum()) / emitted_total if emitted_total > 0 else 0.0
             elapsed = time.perf_counter() - started
             history.append((elapsed, fraction_left))
@@ -144,28 +145,34 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                 last_preview = time.perf_counter()
             if not forced and direct_light is None:
                 direct_light = lamp_light + textures.read_light() - before_emitters
-            if not forced and (direct_only or fraction_left <= tolerance or selection.patch < 0 or emitted_total <= 0):
+            room = min(visibility.capacity, max_shots - shots)
+            chosen = residuals.strongest(room) if not forced else None
+            done = direct_only or fraction_left <= tolerance or emitted_total <= 0 or not residuals.power.max() > 0
+            if not forced and done:
                 stop_reason = "direct light" if direct_only else stop_reason
                 break
-            if shots >= max_shots:
+            if room <= 0:
                 stop_reason = "max_shots"
                 break
-            if forced:  # an emitter's own emission, from its centre
-                patch = forced.pop(0)
-                shooter = shooters.shooter(patch, patches.emission[patch])
-                shooter.keeps_residual = True
+            if forced:  # emitters' own emission, from their centres
+                batch = [shooters.shooter(p, patches.emission[p]) for p in forced[:room]]
+                for shooter in batch:
+                    shooter.keeps_residual = True
+                forced = forced[room:]
             else:
-                shooter = shooters.shooter(selection.patch, selection.residual,
-                                           selection.centroid if settings.shoot_from == "centroid" else None)
-            ledger.pending = shooter.power
-            if effects.occlusion:
-                with timer.stage("visibility"):
-                    visibility_map.render(shooter.position, shooter.axes, skip_patch=drawn[shooter.patch])
+                centroid = settings.shoot_from == "centroid"
+                batch = [shooters.shooter(int(p), residuals.mean[p], residuals.centroid[p] if centroid else None)
+                         for p in chosen]
+            ledger.pending = np.array([shooter.power for shooter in batch])
+            with timer.stage("visibility"):
+                uniforms = visibility.prepare(batch)
             with timer.stage("shoot"):
-                shooting.shoot(shooter, visibility_map)
+                shooting.gather(uniforms)
+                ledger.settle(shooting.read_energy(len(batch)))
             with timer.stage("mipmap"):
                 textures.build_mipmaps()
-            shots += 1
+            shots += len(batch)
+            batches += 1
 
         with timer.stage("readback"):
             light = textures.read_light()
@@ -181,12 +188,12 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         unshot_fraction=float(unshot_gpu.sum()) / emitted_total if emitted_total > 0 else 0.0,
         energy={**ledger.as_dict(), "unshot_gpu_sum": float(unshot_gpu.sum())},
         visibility={"variant": settings.visibility, "resolution": settings.visibility_res,
+                    "batch_capacity": visibility.capacity,
                     "tessellation": variant.tessellation, "search_radius": variant.search_radius,
                     "occluder_margin": variant.occluder_margin, "from": settings.shoot_from},
         kernel=settings.kernel, elements_per_patch=settings.elements,
         shots_per_second=shots / solve_seconds if solve_seconds > 0 else None,
-        work=ProgressiveWork(visibility_maps=(shots if effects.occlusion else 0) + direct.lamp_visibility_maps,
-                             shots=shots, channels_solved=effects.channels,
+        work=ProgressiveWork(visibility_maps=visibility.maps_rendered, shots=shots, batches=batches, channels_solved=effects.channels,
                              texel_bytes=16 if effects.channels == 3 else 4,
                              residual_updates=bool(effects.interreflection), direct=direct),
     )

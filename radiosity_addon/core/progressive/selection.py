@@ -1,6 +1,8 @@
-"""The next shooter, chosen on the GPU: the patch of largest unshot power, from the residual
-texture's mip level log2(S) (one texel per patch: its mean). One readback of 64 bytes
-(`SELECTION_DTYPE`, the layout of select_shooter.comp's Result block) per shot."""
+"""The next shooters: the patches of largest unshot power, read from the residual texture's mip
+level log2(S) - 1 (2 x 2 texels per patch: quadrant means; level 0 when S = 1). One readback per
+batch gives every patch's mean unshot radiosity, the total unshot power and where on each patch
+its unshot power lies (the centroid a shooter's visibility is rendered from: a patch half hidden
+under a box then shoots from its lit part)."""
 
 from __future__ import annotations
 
@@ -8,53 +10,56 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..gpu import Resources, storage, texture_unit
-from ..shooting import ElementTextures, PatchBuffers
+from ..shooting import ElementTextures
 
-SELECTION_DTYPE = np.dtype([
-    ("score", "<f4"), ("patch", "<i4"), ("centroid", "<f4", 2),  # best power, its patch, power centroid (s, t)
-    ("residual", "<f4", 4),  # that patch's mean unshot radiosity (RGB)
-    ("unshot", "<f4", 4),  # total unshot power (RGB)
-    ("last_shot", "<f4", 4),  # the previous shot's hit fraction and reflected fractions (RGB)
-])
-READBACK = (f"{SELECTION_DTYPE.itemsize} bytes per shot: best patch power and index, its unshot power centroid"
-            " (s, t), its mean residual (RGB), total unshot power (RGB), and the previous shot's hit and"
-            " reflected fractions (fixed point sums)")
+# a batch takes the strongest shooters down to this fraction of the strongest one's power: weaker
+# ones would shoot too early (and again later), stronger ones gain from sharing the pass
+BATCH_POWER_FLOOR = 0.05
+READBACK = ("per batch of shots: the residual's mip level log2(S) - 1 (2 x 2 texels per patch) and 16 bytes"
+            " per shot of energy sums (hit and reflected fractions, fixed point)")
 
 
 @dataclass
-class Selection:
-    patch: int  # -1 when nothing is left to shoot
-    score: float
-    residual: np.ndarray  # (3,) mean unshot radiosity of that patch
-    centroid: np.ndarray  # (2,) bilinear (s, t) of that patch's unshot power centroid
+class Residuals:
+    mean: np.ndarray  # (P, 3) mean unshot radiosity of each patch
+    power: np.ndarray  # (P,) unshot power, summed over channels
+    centroid: np.ndarray  # (P, 2) bilinear (s, t) of each patch's unshot power centroid
     unshot: np.ndarray  # (3,) total unshot power
-    last_shot: np.ndarray  # (4,) previous shot: hit fraction, reflected fraction per channel
+
+    def strongest(self, count: int, floor: float = BATCH_POWER_FLOOR) -> np.ndarray:
+        """Up to `count` patches of largest unshot power, strongest first, none under `floor` times
+        the strongest's (empty when nothing is left to shoot)."""
+        top = float(self.power.max()) if len(self.power) else 0.0
+        if top <= 0 or count <= 0:
+            return np.zeros(0, dtype=np.int64)
+        count = min(count, len(self.power))
+        candidates = np.argpartition(-self.power, count - 1)[:count]
+        candidates = candidates[np.argsort(-self.power[candidates], kind="stable")]
+        return candidates[self.power[candidates] >= floor * top]
 
 
-class Selector:
-    def __init__(self, res: Resources, textures: ElementTextures, buffers: PatchBuffers):
-        self.ctx, self.textures, self.buffers = res.ctx, textures, buffers
+class ResidualReader:
+    def __init__(self, textures: ElementTextures, area: np.ndarray):
+        self.textures, self.area = textures, np.asarray(area, dtype=np.float64)
         layout = textures.layout
-        self.program = res.gpu.compute("select_shooter.comp")
-        self.uniforms = {"level": layout.level, "patch_count": layout.patch_count,
-                         "tiles_per_row": layout.residual_tiles_per_row, "elements": layout.elements}
-        self.result = res.buffer(reserve=SELECTION_DTYPE.itemsize)
+        self.level = max(layout.level - 1, 0)
+        self.quadrants = 2 if layout.level > 0 else 1  # texels per patch side at that level
 
-    def select(self) -> Selection:
-        for name, value in self.uniforms.items():
-            self.program[name] = value
-        self.buffers.bind("PATCH_NORMAL_AREA", "SHOT_ENERGY")
-        self.result.bind_to_storage_buffer(storage("SELECTION"))
-        self.textures.residual.use(texture_unit("RESIDUAL"))
-        self.ctx.memory_barrier()
-        self.program.run(1)
-        self.ctx.memory_barrier()
-        raw = np.frombuffer(self.result.read(), dtype=SELECTION_DTYPE)[0]
-        residual, unshot = raw["residual"][:3].astype(np.float64), raw["unshot"][:3].astype(np.float64)
-        if self.textures.channels == 1:  # a grey scene's one channel stands for all three
-            residual, unshot = np.repeat(residual[:1], 3), np.repeat(unshot[:1], 3)
-        score = float(raw["score"])
-        return Selection(patch=int(raw["patch"]) if score > 0 else -1, score=score, residual=residual,
-                         centroid=raw["centroid"].astype(np.float64), unshot=unshot,
-                         last_shot=raw["last_shot"].astype(np.float64))
+    def read(self) -> Residuals:
+        textures, layout, q = self.textures, self.textures.layout, self.quadrants
+        w, h = (size // (layout.elements // q) for size in layout.residual_size)
+        image = np.frombuffer(textures.residual.read(level=self.level), dtype=np.float32)
+        image = image.reshape(h, w, textures.residual.components).astype(np.float64)
+        tiles = image.reshape(h // q, q, w // q, q, -1).transpose(0, 2, 1, 3, 4).reshape(-1, q, q, image.shape[-1])
+        tiles = tiles[:layout.patch_count]
+        tiles = tiles[..., :3] if textures.channels == 3 else np.repeat(tiles[..., :1], 3, axis=-1)
+        mean = tiles.mean(axis=(1, 2))  # the quadrants have equal texel counts: their mean is the tile's
+        weight = tiles.sum(axis=-1)  # (P, q, q)
+        centre = (np.arange(q) + 0.5) / q
+        total = weight.sum(axis=(1, 2))
+        safe = np.where(total > 0, total, 1.0)
+        s = (weight * centre[None, None, :]).sum(axis=(1, 2)) / safe
+        t = (weight * centre[None, :, None]).sum(axis=(1, 2)) / safe
+        centroid = np.where(total[:, None] > 0, np.stack([s, t], axis=1), 0.5)
+        power = self.area * mean.sum(axis=1)
+        return Residuals(mean=mean, power=power, centroid=centroid, unshot=(self.area[:, None] * mean).sum(axis=0))

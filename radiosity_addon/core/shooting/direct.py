@@ -17,11 +17,11 @@ import numpy as np
 
 from ..gpu import Resources
 from ..scene import Patches, Scene
-from ..visibility import VARIANTS, VisibilityMap
 from .elements import ElementTextures
 from .lamps import lamp_shooters, polygon_shooters
 from .shooters import Shooter
 from .shooting_pass import PatchBuffers, ShootingPass
+from .shots import ShotVisibility
 from .sky import SKY_HEMICUBE_RESOLUTION, element_frames, sky_fractions
 
 
@@ -55,37 +55,22 @@ def direct_shooters(scene: Scene, patches: Patches) -> list[Shooter]:
     return lamps_as_shooters(scene) + pieces
 
 
-def shoot_each(shooters: list[Shooter], receivers, visibility_map: VisibilityMap, drawn: np.ndarray,
-               occlusion: bool) -> int:
-    """Shoot `shooters` into `receivers` (a ShootingPass or TexelReceivers), each from a visibility
-    map of its own (a patch's leaves the patch out); returns the maps rendered."""
-    maps = 0
-    for shooter in shooters:
-        if occlusion:
-            skip = int(drawn[shooter.patch]) if shooter.patch >= 0 else -1
-            visibility_map.render(shooter.position, shooter.axes, skip, shooter.ortho_extent)
-            maps += 1
-        receivers.shoot(shooter, visibility_map)
-    return maps
-
-
-def shoot_lamps(scene: Scene, patches: Patches, shooting: ShootingPass, visibility_map: VisibilityMap,
-                occlusion: bool) -> DirectLightWork:
+def shoot_lamps(scene: Scene, shooting: ShootingPass) -> DirectLightWork:
     """Shoot every lamp once."""
-    shooters = lamps_as_shooters(scene)
-    maps = shoot_each(shooters, shooting, visibility_map, patches.drawn, occlusion)
-    return DirectLightWork(lamps=len(scene.lamps), lamp_visibility_maps=maps)
+    before = shooting.visibility_source.maps_rendered
+    shooting.shoot_all(lamps_as_shooters(scene))
+    return DirectLightWork(lamps=len(scene.lamps), lamp_visibility_maps=shooting.visibility_source.maps_rendered - before)
 
 
 def shoot_sky(res: Resources, scene: Scene, patches: Patches, elements: int, shooting: ShootingPass,
-              visibility_map: VisibilityMap, work: DirectLightWork) -> None:
+              work: DirectLightWork) -> None:
     """Every element gathers the world colour times its sky fraction."""
     sky = scene.world_color
     if np.any(sky > 0):
         fractions = sky_fractions(res, patches, element_frames(patches, elements), SKY_HEMICUBE_RESOLUTION,
                                   scene.diameter)
         work.sky_hemicubes = len(fractions)
-        shooting.shoot_sky(sky, fractions, visibility_map)
+        shooting.shoot_sky(sky, fractions)
 
 
 def direct_light_on_patches(res: Resources, scene: Scene, patches: Patches, visibility: str, visibility_res: int,
@@ -95,11 +80,10 @@ def direct_light_on_patches(res: Resources, scene: Scene, patches: Patches, visi
     with res.gpu.resources() as scoped:
         textures = ElementTextures(scoped, patches, elements)
         buffers = PatchBuffers(scoped, patches, textures)
-        visibility_map = VisibilityMap(scoped, patches, visibility_res, visibility, scene.diameter)
-        shooting = ShootingPass(scoped, textures, buffers, "exact", VARIANTS[visibility].search_radius,
-                                occluder_margin=VARIANTS[visibility].occluder_margin, occlusion=occlusion)
-        work = shoot_lamps(scene, patches, shooting, visibility_map, occlusion)
+        shots = ShotVisibility(scoped, patches, visibility_res, visibility, scene.diameter, occlusion)
+        shooting = ShootingPass(scoped, textures, buffers, "exact", shots)
+        work = shoot_lamps(scene, shooting)
         lamps = textures.read_light()
-        shoot_sky(scoped, scene, patches, elements, shooting, visibility_map, work)
+        shoot_sky(scoped, scene, patches, elements, shooting, work)
         sky = textures.read_light() - lamps
     return lamps, sky, work

@@ -9,9 +9,9 @@ import numpy as np
 
 from ..gpu import Resources, storage
 from ..scene import Patches
-from ..visibility import VisibilityMap
 from .shooters import Shooter
-from .shooting_pass import dispatch, set_uniforms, shot_uniforms
+from .shooting_pass import dispatch, set_uniforms
+from .shots import ShotVisibility
 
 
 class TexelReceivers:
@@ -19,7 +19,7 @@ class TexelReceivers:
     (the plane of the patch each lies on: `Patches.plane`)."""
 
     def __init__(self, res: Resources, patches: Patches, positions: np.ndarray, normals: np.ndarray,
-                 planes: np.ndarray, kernel: str, search_radius: int, occluder_margin: float, occlusion: bool):
+                 planes: np.ndarray, kernel: str, visibility: ShotVisibility):
         self.ctx, self.count = res.ctx, len(positions)
         vec4 = lambda a: np.concatenate([a, np.zeros((len(a), 1))], axis=1).astype(np.float32)  # noqa: E731
         self.buffers = {
@@ -29,18 +29,26 @@ class TexelReceivers:
             "TEXEL_LIGHT": res.buffer(np.zeros((self.count, 4), dtype=np.float32).tobytes()),
             "PATCH_PLANE": res.buffer(patches.plane.astype(np.int32).tobytes()),
         }
+        self.visibility = visibility
         self.program = res.gpu.compute("shoot_to_texels.comp", defines={
-            "KERNEL_EXACT": int(kernel == "exact"), "SEARCH_RADIUS": search_radius,
-            "OCCLUDER_MARGIN": float(occluder_margin), "OCCLUSION": int(occlusion)})
+            "KERNEL_EXACT": int(kernel == "exact"), **visibility.defines})
 
-    def shoot(self, shooter: Shooter, visibility_map: VisibilityMap) -> None:
-        set_uniforms(self.program, {"texel_count": self.count, **shot_uniforms(shooter, visibility_map)})
+    def shoot(self, shooters: list[Shooter]) -> None:
+        """One batch (see `ShotVisibility.batches`)."""
+        uniforms = self.visibility.prepare(shooters)
+        set_uniforms(self.program, {"texel_count": self.count, **uniforms})
         for name, buffer in self.buffers.items():
             buffer.bind_to_storage_buffer(storage(name))
-        visibility_map.bind()
         self.ctx.memory_barrier()
         dispatch(self.program, self.count)
         self.ctx.memory_barrier()
+
+    def shoot_all(self, shooters: list[Shooter]) -> int:
+        """Every shooter, in batches; returns the batches."""
+        batches = self.visibility.batches(shooters)
+        for batch in batches:
+            self.shoot(batch)
+        return len(batches)
 
     def read_light(self) -> np.ndarray:
         """(N, 3) float64 light H gathered by each point."""

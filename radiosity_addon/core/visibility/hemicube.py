@@ -102,10 +102,13 @@ def scene_geometry(patches: Patches) -> tuple[np.ndarray, np.ndarray]:
     return vertices, indices[keep].astype(np.uint32)
 
 
-class HemicubeRenderer:
-    """GPU objects for one set of patches and resolution: `coverage(frames)` per batch."""
+class HemicubeAtlas:
+    """Hemi-cube item buffers of one set of patches, many per atlas, drawn by one instanced call:
+    `draw(frames)` fills slots 0..len(frames) - 1 (front items: patch id + 1; backs: the twin's
+    id + 1, or `back_item` where the back is not simulated; 0: nothing)."""
 
-    def __init__(self, res: Resources, patches: Patches, resolution: int, scene_diameter: float):
+    def __init__(self, res: Resources, patches: Patches, resolution: int, scene_diameter: float,
+                 max_slots: int | None = None):
         ctx = res.ctx
         self.ctx = ctx
         self.patches = patches
@@ -113,6 +116,9 @@ class HemicubeRenderer:
         self.patch_count = len(patches)
         self.tiles_per_row = max(1, ATLAS_LIMIT // resolution)
         tile_rows = max(1, ATLAS_LIMIT // (3 * resolution))
+        if max_slots is not None:  # no larger than the batches need
+            self.tiles_per_row = min(self.tiles_per_row, max_slots)
+            tile_rows = min(tile_rows, -(-max_slots // self.tiles_per_row))
         self.slots = self.tiles_per_row * tile_rows
         self.atlas_size = (self.tiles_per_row * resolution, tile_rows * 3 * resolution)
         self.row_length = self.patch_count + 1  # the last column: backs of patches
@@ -138,6 +144,28 @@ class HemicubeRenderer:
         self.depth = res.depth_renderbuffer(self.atlas_size)
         self.framebuffer = res.framebuffer([self.item_texture], self.depth)
 
+    def draw(self, hemicube_frames) -> None:
+        """Draw the hemi-cubes at `hemicube_frames` (centre, x, y, pole arrays; at most `slots`)."""
+        ctx = self.ctx
+        count = len(hemicube_frames[0])
+        instances = face_instances(hemicube_frames, self.resolution, self.tiles_per_row, self.atlas_size)
+        self.instance_buffer.write(instances.tobytes())
+        for name, value in self.uniforms.items():
+            self.program[name] = value
+        self.framebuffer.use()
+        self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
+        ctx.enable_only(ctx.DEPTH_TEST)
+        self.vao.render(instances=count * 5)
+
+    def bind(self, unit: int) -> None:
+        self.item_texture.use(unit)
+
+
+class HemicubeRenderer(HemicubeAtlas):
+    """Hemi-cubes reduced to coverage rows on the GPU: `coverage(frames)` per batch."""
+
+    def __init__(self, res: Resources, patches: Patches, resolution: int, scene_diameter: float):
+        super().__init__(res, patches, resolution, scene_diameter)
         self.reduce = res.gpu.compute("hemicube_form_factor_rows.comp")
         weights = fixed_point_weights(delta_form_factors(resolution))
         self.weight_buffer = res.buffer(weights.tobytes())
@@ -153,15 +181,7 @@ class HemicubeRenderer:
         1 minus a row's sum is what sees the sky."""
         ctx = self.ctx
         count = len(hemicube_frames[0])
-        instances = face_instances(hemicube_frames, self.resolution, self.tiles_per_row, self.atlas_size)
-        self.instance_buffer.write(instances.tobytes())
-        for name, value in self.uniforms.items():
-            self.program[name] = value
-        self.framebuffer.use()
-        self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
-        ctx.enable_only(ctx.DEPTH_TEST)
-        self.vao.render(instances=count * 5)
-
+        self.draw(hemicube_frames)
         self.row_buffer.clear()
         self.item_texture.use(texture_unit("ITEM_BUFFER"))
         self.weight_buffer.bind_to_storage_buffer(storage("DELTA_FORM_FACTORS"))

@@ -12,7 +12,9 @@ looks receivers up in it. Variants (see `VARIANTS`):
 - search: tessellated, and a receiver also accepts its id in the texels
   around its own (dissertation Algorithm 8);
 - guarded: search, but not past a texel that shows something clearly nearer
-  (a distance map is drawn with the items).
+  (a distance map is drawn with the items);
+- hemicube: not this map but five perspective faces per shooter (`hemicube.HemicubeAtlas`),
+  with the search; many shooters share one atlas and one draw call.
 
 A map knows nothing of shooters: a patch renders it from a point of its own with its
 normal as pole, a point lamp one or two from its position, a sun one orthographic map.
@@ -40,9 +42,13 @@ class Variant:
     tessellation: int
     search_radius: int
     occluder_margin: float = -1.0  # < 0: search even when the own texel shows something nearer
+    hemicube: bool = False  # shots look receivers up in hemi-cubes (HemicubeAtlas), many per pass
 
 
 VARIANTS = {
+    # hemi-cubes: straight edges stay straight on each face (no tessellation), and a whole batch
+    # of shooters is drawn by one instanced call; a sun still uses one orthographic map
+    "hemicube": Variant(tessellation=1, search_radius=1, hemicube=True),
     "plain": Variant(tessellation=1, search_radius=0),
     "tessellated": Variant(tessellation=TESSELLATION, search_radius=0),
     "search": Variant(tessellation=TESSELLATION, search_radius=1),
@@ -61,7 +67,7 @@ class VisibilityMap:
         ctx = res.ctx
         self.ctx = ctx
         self.resolution = resolution
-        self.variant = VARIANTS[variant]
+        self.variant = VARIANTS[variant]  # "hemicube": the map of a sun (orthographic: no tessellation)
         self.program = self._link(res.gpu, self.variant.tessellation)
         self.scene_diameter = scene_diameter
         count = patches.front_count  # a back is drawn as its front seen from behind (its twin id)

@@ -1,0 +1,126 @@
+"""Shots in batches: the records the shooting passes read ("shot" include, a uniform block of
+MAX_SHOTS), and the visibility each batch is looked up in.
+
+With the "hemicube" visibility variant a batch holds up to `capacity` shooters (patches, pieces of
+emitters and area lamps, point lamps): their hemi-cubes are drawn into one atlas by one instanced
+call and one dispatch gathers all of them, so the per-draw and per-dispatch overhead is shared.
+A sun (an orthographic map) and the sky (fractions) shoot alone, as does every shooter with the
+hemispherical map variants (one map at a time).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..gpu import Resources, texture_unit, uniform_block
+from ..scene import Patches
+from ..visibility import VARIANTS, HemicubeAtlas, VisibilityMap
+from .shooters import DIRECTIONAL, SKY, Shooter
+
+MAX_SHOTS = 64  # records per uniform block: 64 x 176 bytes, within GL's 16 KiB guarantee
+SHOT_VEC4S = 11  # vec4s per record (struct Shot)
+MAX_HEMICUBE_RESOLUTION = 1024  # a hemi-cube's top face, in pixels (its tile is 3 x taller)
+
+
+def shot_records(shooters: list[Shooter], slots: list[int]) -> np.ndarray:
+    """(MAX_SHOTS, 11, 4) float32 records of `shooters` (hemi-cube `slots`, -1: the bound map)."""
+    records = np.zeros((MAX_SHOTS, SHOT_VEC4S, 4), dtype=np.float32)
+    for k, (shooter, slot) in enumerate(zip(shooters, slots)):
+        x, y, pole = shooter.axes
+        records[k, 0] = (*shooter.position, shooter.area)
+        records[k, 1] = (*x, shooter.kind)
+        records[k, 2] = (*y, shooter.patch)
+        records[k, 3] = (*pole, float(shooter.keeps_residual))
+        records[k, 4:8, :3] = shooter.polygon
+        records[k, 8, :3] = shooter.radiosity
+        records[k, 9] = (*shooter.light_direction, shooter.spot_cos_half)
+        records[k, 10] = (shooter.spot_smooth, slot, shooter.ortho_extent, 0.0)
+    return records
+
+
+def hemicube_resolution(visibility_res: int) -> int:
+    """A hemi-cube's top face for a visibility resolution: its unfolded cross (2 R) spans as many
+    pixels as a hemispherical map across."""
+    return int(np.clip(visibility_res // 4 * 2, 8, MAX_HEMICUBE_RESOLUTION))
+
+
+class ShotVisibility:
+    """Visibility for batches of shots, and the uniform block that carries their records.
+    `prepare(shooters)` renders what the batch needs and binds it; `batches(shooters)` splits a
+    list into batches this can take."""
+
+    def __init__(self, res: Resources, patches: Patches, resolution: int, variant: str, scene_diameter: float,
+                 occlusion: bool = True, capacity: int = MAX_SHOTS):
+        self.res, self.patches, self.resolution, self.occlusion = res, patches, resolution, occlusion
+        self.variant, self.diameter = VARIANTS[variant], scene_diameter
+        self.name = variant
+        self.atlas = None
+        self._map = None
+        if self.variant.hemicube:
+            self.capacity = min(capacity, MAX_SHOTS)
+            if occlusion:
+                self.atlas = HemicubeAtlas(res, patches, hemicube_resolution(resolution), scene_diameter,
+                                           max_slots=self.capacity)
+                self.capacity = min(self.capacity, self.atlas.slots)
+        else:
+            self.capacity = 1
+        self.block = res.buffer(reserve=MAX_SHOTS * SHOT_VEC4S * 16)
+        self.maps_rendered = 0
+
+    @property
+    def map(self) -> VisibilityMap:
+        """The hemispherical (or a sun's orthographic) map, made when first needed."""
+        if self._map is None:
+            variant = "plain" if self.variant.hemicube else self.name  # a sun's map needs no tessellation
+            self._map = VisibilityMap(self.res, self.patches, self.resolution, variant, self.diameter)
+        return self._map
+
+    @staticmethod
+    def alone(shooter: Shooter) -> bool:
+        return shooter.kind in (DIRECTIONAL, SKY)
+
+    def batches(self, shooters: list[Shooter]) -> list[list[Shooter]]:
+        """Consecutive batches of at most `capacity`; a sun or the sky alone."""
+        batches, current = [], []
+        for shooter in shooters:
+            if self.alone(shooter) or len(current) == self.capacity:
+                if current:
+                    batches.append(current)
+                current = []
+            if self.alone(shooter):
+                batches.append([shooter])
+            else:
+                current.append(shooter)
+        return batches + ([current] if current else [])
+
+    def prepare(self, shooters: list[Shooter]) -> dict:
+        """Render the batch's visibility, write and bind its records; returns the passes' uniforms."""
+        if len(shooters) > self.capacity and not (len(shooters) == 1):
+            raise ValueError(f"a batch of {len(shooters)} shots exceeds {self.capacity}")
+        slots = [-1] * len(shooters)
+        uniforms = {"shot_count": len(shooters), "item_resolution": self.resolution,
+                    "hemicube_resolution": 1, "hemicube_tiles_per_row": 1}
+        if self.occlusion:
+            if self.atlas is not None and not any(self.alone(s) for s in shooters):
+                slots = list(range(len(shooters)))
+                self.atlas.draw(tuple(np.array(v, dtype=np.float64) for v in zip(
+                    *[(s.position, *s.axes) for s in shooters])))
+                self.atlas.bind(texture_unit("HEMICUBES"))
+                uniforms.update(hemicube_resolution=self.atlas.resolution,
+                                hemicube_tiles_per_row=self.atlas.tiles_per_row)
+                self.maps_rendered += len(shooters)
+            elif shooters[0].kind != SKY:
+                (shooter,) = shooters
+                skip = int(self.patches.drawn[shooter.patch]) if shooter.patch >= 0 else -1
+                self.map.render(shooter.position, shooter.axes, skip, shooter.ortho_extent)
+                self.map.bind()
+                self.maps_rendered += 1
+        self.block.write(shot_records(shooters, slots).tobytes())
+        self.block.bind_to_uniform_block(uniform_block("SHOTS"))
+        return uniforms
+
+    @property
+    def defines(self) -> dict:
+        """The "shot" include's defines."""
+        return {"MAX_SHOTS": MAX_SHOTS, "SEARCH_RADIUS": self.variant.search_radius,
+                "OCCLUDER_MARGIN": float(self.variant.occluder_margin), "OCCLUSION": int(self.occlusion)}
