@@ -12,7 +12,8 @@ import time
 from pathlib import Path
 
 from . import core
-from .core import CONTENTS, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, SHOOTING_POINTS, SOLVERS, TEXEL_DENSITY, VISIBILITY_VARIANTS
+from .core import (CONTENTS, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, QUALITIES, SHOOTING_POINTS, SOLVERS, TEXEL_DENSITY,
+                   VISIBILITY_VARIANTS)
 from .core import LightmapSettings, SolveError, SolveSettings
 
 
@@ -22,9 +23,11 @@ def user_errors() -> tuple:
     return core.USER_ERRORS + ((blender_errors.BakeError,) if blender_errors else ())
 
 
-# (flags, SolveSettings field, argparse keywords, help); the defaults come from SolveSettings
+# (flags, SolveSettings field, argparse keywords, help); the defaults come from the --quality preset
 SOLVER_OPTIONS = [
-    ("--method", "method", {"choices": METHODS}, "progressive refinement or the hemi-cube method"),
+    ("--method", "method", {"choices": METHODS},
+     "auto (the method the cost model predicts faster; the report says why), progressive refinement or the"
+     " hemi-cube method"),
     ("--patch-size", "patch_size", {"type": float, "metavar": "S"},
      "split surfaces into patches about S scene units (metres) across, small ones staying whole"),
     ("--subdiv", "subdiv", {"type": int, "metavar": "N"},
@@ -33,8 +36,8 @@ SOLVER_OPTIONS = [
     ("--hemicube-res", "hemicube_res", {"type": int, "metavar": "R"}, "hemi-cube top-face resolution in pixels"),
     ("--solver", "solver", {"choices": SOLVERS}, "linear solver of the hemi-cube method"),
     ("--tolerance", "tolerance", {"type": float, "metavar": "T"},
-     "hemicube: max change relative to max B (1e-5 when not given); progressive: unshot power relative to"
-     " emitted power (1e-3)"),
+     "hemicube: max change relative to max B; progressive: unshot power relative to emitted power"
+     " (not given: the quality's, 1e-5 and 1e-3 for good)"),
     ("--max-iterations", "max_iterations", {"type": int}, "iteration cap of the linear solvers"),
     ("--max-shots", "max_shots", {"type": int}, "shot budget of the progressive method"),
     ("--visibility", "visibility", {"choices": VISIBILITY_VARIANTS},
@@ -50,19 +53,23 @@ SOLVER_OPTIONS = [
 
 
 def add_solver_options(parser: argparse.ArgumentParser, defaults_from_file: bool = False) -> None:
-    """The solver options. With `defaults_from_file` (bake), an option not given leaves the .blend's
-    own setting (or the shared default) in place: it is left out of the parsed arguments."""
-    defaults = SolveSettings()
+    """The solver options. An option not given takes the --quality preset's value (`solve`), or
+    (`bake`, with `defaults_from_file`) leaves the .blend's own setting in place: either way it is
+    left out of the parsed arguments."""
+    defaults = SolveSettings()  # the "good" preset
     group = parser.add_argument_group("solver")
+    group.add_argument("--quality", choices=QUALITIES, default=argparse.SUPPRESS if defaults_from_file else "good",
+                       help="what every knob below defaults to: draft (fast), good, final (the README's"
+                            " 'What accuracy costs' gives each one's measured error and time)"
+                            + (" (default: the file's setting)" if defaults_from_file else " (default good)"))
     for flag, field, keywords, text in SOLVER_OPTIONS:
         default = getattr(defaults, field)
+        keywords = {**keywords, "default": argparse.SUPPRESS}
         if defaults_from_file:
-            keywords = {**keywords, "default": argparse.SUPPRESS}
             text += " (default: the file's setting)"
-        else:
-            keywords = {**keywords, "default": default}
-            text += f" (default {default:g})" if isinstance(default, float) else (
-                f" (default {default})" if default is not None else "")
+        elif default is not None and field != "tolerance":
+            shown = f"{default:g}" if isinstance(default, float) else f"{default}"
+            text += f" (default: the quality's; good: {shown})"
         group.add_argument(flag, dest=field, help=text, **keywords)
     group.add_argument("--no-skips", dest="skip_unneeded", action="store_false",
                        default=argparse.SUPPRESS if defaults_from_file else True,
@@ -70,8 +77,8 @@ def add_solver_options(parser: argparse.ArgumentParser, defaults_from_file: bool
 
 
 def given_solver_options(args) -> dict:
-    """SolveSettings fields given on the command line (all of them for `solve`)."""
-    fields = [field for _, field, _, _ in SOLVER_OPTIONS] + ["skip_unneeded"]
+    """SolveSettings fields given on the command line, and the quality."""
+    fields = ["quality"] + [field for _, field, _, _ in SOLVER_OPTIONS] + ["skip_unneeded"]
     given = {field: getattr(args, field) for field in fields if hasattr(args, field)}
     if given.get("subdiv") is None and "patch_size" in given:
         given["subdiv"] = None  # --patch-size chooses the size mode
@@ -79,7 +86,8 @@ def given_solver_options(args) -> dict:
 
 
 def settings_from_args(args) -> SolveSettings:
-    return SolveSettings(**given_solver_options(args))
+    given = given_solver_options(args)
+    return SolveSettings.preset(given.pop("quality", "good"), **given)
 
 
 class ProgressLine:
@@ -122,9 +130,9 @@ def write_lightmaps_and_preview(args, scene, solution, gpu) -> None:
     """`solve --lightmaps DIR` / `--preview OUT.png`: bake the lightmaps, write them and the picture."""
     import numpy as np
 
-    lightmaps = core.bake_lightmaps(scene, solution, LightmapSettings(texel_density=args.texel_density,
-                                                                      max_size=args.max_lightmap_size,
-                                                                      content=args.content), gpu=gpu)
+    settings = LightmapSettings.preset(args.quality, texel_density=args.texel_density,
+                                       max_size=args.max_lightmap_size, content=args.content)
+    lightmaps = core.bake_lightmaps(scene, solution, settings, gpu=gpu)
     if args.lightmaps:
         directory = Path(args.lightmaps)
         directory.mkdir(parents=True, exist_ok=True)

@@ -29,13 +29,15 @@ def ensure_addon() -> None:
         blender.register()
 
 
-def open_blend(path: Path, method: str = "hemicube", subdivision: int = 2, content: str = "combined"):
-    """Open a file and choose quick solver settings (and what the lightmaps hold: these tests read
-    B off them unless they ask for the light); returns bpy.context."""
+def open_blend(path: Path, method: str = "hemicube", subdivision: int = 2, content: str = "combined",
+               quality: str = "CUSTOM"):
+    """Open a file and choose quick solver settings, or a quality preset (and what the lightmaps
+    hold: these tests read B off them unless they ask for the light); returns bpy.context."""
     ensure_addon()
     bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
     settings = bpy.context.scene.radiosity
     settings.content = content
+    settings.quality = quality
     settings.method = method
     settings.patch_mode = "SUBDIVISION"
     settings.subdivision = subdivision

@@ -18,7 +18,7 @@ TOLERANCE = 0.10  # per object and channel, relative to Cycles' mean
 
 
 def test_cornell_lightmaps_agree_with_cycles_within_ten_percent_per_object():
-    support.open_blend(support.CORNELL, method="progressive", subdivision=4)
+    support.open_blend(support.CORNELL, method="auto", quality="final")
     objects = [obj for obj in bpy.context.scene.objects if obj.type == "MESH"]
     assert bpy.ops.radiosity.bake() == {"FINISHED"}
     ours = {obj.name: support.image_rgba(bpy.data.images[f"{obj.name}_lightmap"]) for obj in objects}

@@ -39,8 +39,9 @@ ALLOWED = {
     "report": BASE | {"scene", "hemicube", "progressive"},
     "solution": BASE | {"scene", "report"},
     "refinement": BASE | {"gpu", "scene", "uvspace", "progressive"},
+    "method_choice": BASE | {"scene", "shooting", "hemicube"},
     "solve": BASE | {"gpu", "scene", "shooting", "uvspace", "hemicube", "progressive", "report", "solution",
-              "refinement"},
+              "refinement", "method_choice"},
     "lightmap": BASE | {"gpu", "imaging", "scene", "uvspace", "visibility", "shooting", "solution"},
     "preview": BASE | {"gpu", "scene", "lightmap"},
 }

@@ -32,15 +32,17 @@ class RENDER_PT_radiosity_bake(bpy.types.Panel):
 
         column = layout.column()
         column.enabled = plan is None
+        column.prop(settings, "quality")
         column.prop(settings, "method")
-        column.prop(settings, "patch_mode")
-        column.prop(settings, "patch_size" if settings.patch_mode == "SIZE" else "subdivision")
-        if settings.method == "progressive":
-            column.prop(settings, "elements")
-        else:
-            column.prop(settings, "hemicube_resolution")
-            column.prop(settings, "solver")
-        column.prop(settings, "tolerance")
+        if settings.quality == "CUSTOM":  # the presets set these knobs themselves
+            column.prop(settings, "patch_mode")
+            column.prop(settings, "patch_size" if settings.patch_mode == "SIZE" else "subdivision")
+            if settings.method != "hemicube":
+                column.prop(settings, "elements")
+            if settings.method != "progressive":
+                column.prop(settings, "hemicube_resolution")
+                column.prop(settings, "solver")
+            column.prop(settings, "tolerance")
         column.prop(settings, "include_unselected")
 
         column.separator()

@@ -8,12 +8,12 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, Po
 from ..core import MAX_LIGHTMAP_SIZE, PATCH_SIZE, TEXEL_DENSITY, LightmapSettings, SolveSettings
 from .options import BakeOptions
 
-_DEFAULTS = SolveSettings()
+_DEFAULTS = SolveSettings.preset("good")  # what the panel starts with: auto, good
 _OPTIONS = BakeOptions()
 
 METHOD_ITEMS = [
-    ("progressive", "Progressive", "Progressive refinement on the GPU: shoots the brightest patch first"
-                                   " (fast, the default)"),
+    ("auto", "Auto", "The method the cost model predicts faster for this scene (the report says why)"),
+    ("progressive", "Progressive", "Progressive refinement on the GPU: shoots the brightest patches first"),
     ("hemicube", "Hemi-cube", "The hemi-cube method (the dissertation's original): hemi-cube form factors"
                               " and a linear solve (memory grows with patches squared)"),
 ]
@@ -23,6 +23,12 @@ SOLVER_ITEMS = [
     ("gauss-seidel", "Gauss-Seidel (CPU)", "Gauss-Seidel iterations with numpy: about half the sweeps of Jacobi"),
 ]
 ELEMENT_ITEMS = [(str(s), f"{s} x {s}", f"{s * s} receiving elements per patch") for s in (1, 2, 4, 8, 16)]
+QUALITY_ITEMS = [
+    ("draft", "Draft", "Fast: coarse patches, few refinements, a loose tolerance"),
+    ("good", "Good", "The default: what the bench found the best trade of error against time"),
+    ("final", "Final", "More refinement, elements and visibility resolution, a tight tolerance"),
+    ("CUSTOM", "Custom", "Patch size, elements, hemi-cube resolution, solver and tolerance as set below"),
+]
 CONTENT_ITEMS = [
     ("light", "Light", "The light arriving at each texel: the material shows emission + Base Color x lightmap,"
                        " its textures at full resolution (what game engines multiply by albedo)"),
@@ -36,6 +42,9 @@ OUTPUT_ITEMS = [
 
 
 class RadiositySceneSettings(bpy.types.PropertyGroup):
+    quality: EnumProperty(name="Quality", items=QUALITY_ITEMS, default=_DEFAULTS.quality,
+                          description="What the solver's knobs are set to (each preset's measured error and time:"
+                                      " the README's 'What accuracy costs')")
     method: EnumProperty(name="Method", items=METHOD_ITEMS, default=_DEFAULTS.method)
     patch_mode: EnumProperty(name="Patches", default="SIZE", items=[
         ("SIZE", "Patch Size", "Split faces into patches about Patch Size across; smaller faces stay one patch"),
@@ -75,12 +84,17 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
         """The panel's settings, and the resolution overrides of `objects`, as a plain object."""
         overrides = {obj.name: obj.radiosity.lightmap_resolution for obj in objects
                      if obj.radiosity.lightmap_resolution > 0}
-        solve = SolveSettings(method=self.method, subdiv=self.subdivision if self.patch_mode == "SUBDIVISION" else None,
-                              patch_size=self.patch_size, elements=int(self.elements),
-                              hemicube_res=self.hemicube_resolution, solver=self.solver,
-                              tolerance=self.tolerance or None)
-        lightmaps = LightmapSettings(texel_density=self.texel_density, max_size=self.max_resolution,
-                                     resolution_overrides=overrides, content=self.content)
+        quality = "good" if self.quality == "CUSTOM" else self.quality
+        if self.quality == "CUSTOM":
+            solve = SolveSettings(method=self.method,
+                                  subdiv=self.subdivision if self.patch_mode == "SUBDIVISION" else None,
+                                  patch_size=self.patch_size, elements=int(self.elements),
+                                  hemicube_res=self.hemicube_resolution, solver=self.solver,
+                                  tolerance=self.tolerance or None)
+        else:
+            solve = SolveSettings.preset(quality, method=self.method)
+        lightmaps = LightmapSettings.preset(quality, texel_density=self.texel_density, max_size=self.max_resolution,
+                                            resolution_overrides=overrides, content=self.content)
         return BakeOptions(solve=solve, lightmaps=lightmaps, output=self.output,
                            include_unselected=self.include_unselected, uv_margin=self.uv_margin)
 

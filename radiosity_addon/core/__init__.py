@@ -95,15 +95,16 @@ from .report import Report
 from .scene.geometry import bilinear
 from .scene import (MAX_REFLECTANCE, MaterialMap, Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
                     save_scene, scene_from_dict, subdivide)
-from .settings import (CONTENTS, DEFAULT_TOLERANCE, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, PATCH_SIZE, SHOOTING_POINTS, SOLVERS,
-                       TEXEL_DENSITY, VISIBILITY_VARIANTS, LightmapSettings, SolveSettings)
+from .settings import (CONTENTS, DEFAULT_TOLERANCE, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, PATCH_SIZE, QUALITIES,
+                       QUALITY_PRESETS, SHOOTING_POINTS, SOLVE_METHODS, SOLVERS, TEXEL_DENSITY, VISIBILITY_VARIANTS,
+                       LightmapSettings, SolveSettings)
 from .solution import Solution
 from .solve import solve
 from .uvspace import surfaces_with_material_maps
 
 __all__ = [
     "CONTENTS", "Camera", "Convergence", "DEFAULT_TOLERANCE", "GLUnavailable", "GPU", "KERNELS", "Lightmap", "LightmapSettings", "MAX_REFLECTANCE", "MaterialMap",
-    "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
+    "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "QUALITIES", "QUALITY_PRESETS", "SOLVE_METHODS", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
     "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "Surface", "TEXEL_DENSITY",
     "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",
     "form_factor_matrix", "lightmap_sizes", "polygon_faults",

@@ -25,34 +25,42 @@ from .uvspace import patch_material_values
 
 REFINE_FLOOR = 0.05
 PROBE_ELEMENTS = 4  # elements per patch side the direct light is measured on
+GAP_RESOLUTION = 2.0  # patches facing another surface closely are split down to this many gaps
+SMALLEST_PATCH = 1 / 1024  # of the scene's diameter: no split below it
 
 
-def faced_closely(patches: Patches, candidates: np.ndarray) -> np.ndarray:
-    """(len(candidates),) bool: a patch of another surface faces the candidate (both fronts towards
-    each other) with its bounding sphere closer to the candidate's centre than twice its size."""
+def facing_gaps(patches: Patches, candidates: np.ndarray) -> np.ndarray:
+    """(len(candidates),) float: for each candidate, the distance from its centre to the plane of
+    the nearest patch of another surface that faces it (both fronts towards each other) with its
+    bounding sphere within twice the candidate's size; inf where none does. A 5 mm gap between an
+    emitter and a ceiling is such a distance: the light trapped between them escapes through it."""
     centre, normal = patches.center, patches.normal
     radius = np.linalg.norm(patches.corners - centre[:, None], axis=2).max(axis=1)
-    near = np.zeros(len(candidates), dtype=bool)
+    gaps = np.full(len(candidates), np.inf)
     for query, other in near_pairs(centre, radius, candidates, 2 * radius[candidates]):
         rows = candidates[query]
         offset = centre[other] - centre[rows]  # candidate -> other
         facing = (np.einsum("nd,nd->n", offset, normal[rows]) > 0) & (np.einsum("nd,nd->n", offset, normal[other]) < 0)
         close = facing & (patches.surface[other] != patches.surface[rows])
-        near[query[close]] = True
-    return near
+        gap = np.abs(np.einsum("nd,nd->n", offset, normal[other]))[close]
+        np.minimum.at(gaps, query[close], gap)
+    return gaps
 
 
 def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: float, min_size: float) -> np.ndarray:
     """(P,) bool: patches whose elements' light spreads more than `threshold` of their mean (plus
-    the floor), that another surface faces closely, and that are still larger than `min_size`."""
+    the floor), that another surface faces from closer than their size (they are split until they
+    are GAP_RESOLUTION times the gap: a patch sends its light as if uniform, and across a gap that
+    light lands within a gap's width), and that are still larger than `min_size`."""
     light = np.asarray(element_light, dtype=np.float64).sum(axis=-1)  # (P, S, S)
     mean = light.mean(axis=(1, 2))
     area = patches.area
     floor = REFINE_FLOOR * float((area * mean).sum() / area.sum())
     spread = light.max(axis=(1, 2)) - light.min(axis=(1, 2))
-    split = (spread > threshold * (mean + floor)) & (np.sqrt(area) > min_size)
+    size = np.sqrt(area)
+    split = (spread > threshold * (mean + floor)) & (size > min_size)
     candidates = np.flatnonzero(split)
-    split[candidates] = faced_closely(patches, candidates)
+    split[candidates] = size[candidates] > GAP_RESOLUTION * facing_gaps(patches, candidates)
     return split
 
 
@@ -65,7 +73,7 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer) -> tup
     for level in range(settings.refinements):
         with timer.stage("refine"):
             _, _, light, _, _ = solve_progressive(gpu, scene, patches, probe, effects, StageTimer(), direct_only=True)
-            min_size = (settings.patch_size if settings.subdiv is None else scene.diameter / 16) / 2 ** (level + 3)
+            min_size = SMALLEST_PATCH * scene.diameter
             split = patches_to_refine(patches, light, settings.refine_threshold, min_size)
             if not split.any():
                 break

@@ -30,6 +30,7 @@ class Report:
     details: HemicubeDetails | ProgressiveDetails
     radiosity_max: float
     refined: list = field(default_factory=list)  # patches split at each refinement (their light changed fast)
+    method_choice: dict | None = None  # --method auto: the method chosen, why, and both predictions
 
     @property
     def work(self):
@@ -48,7 +49,7 @@ class Report:
         return {"method": self.method, "settings": self.settings.as_dict(), "counts": asdict(self.counts),
                 "timings": dict(self.timings), **self.details.entries(),
                 "effects": {**asdict(self.effects), **self.work.entries()}, "radiosity_max": self.radiosity_max,
-                "refined": list(self.refined)}
+                "refined": list(self.refined), "method_choice": self.method_choice}
 
     def summary_line(self) -> str:
         """One line saying what the solve simulated and skipped (the Blender panel shows it)."""

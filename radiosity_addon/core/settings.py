@@ -8,12 +8,31 @@ from dataclasses import asdict, dataclass, field
 
 from .errors import SolveError
 
-METHODS = ("progressive", "hemicube")  # progressive refinement, or the hemi-cube method (the original)
+SOLVE_METHODS = ("progressive", "hemicube")  # progressive refinement, or the hemi-cube method (the original)
+METHODS = ("auto",) + SOLVE_METHODS  # auto: the one the cost model predicts faster (core/method_choice.py)
 SOLVERS = ("jacobi-gpu", "jacobi-cpu", "gauss-seidel")  # linear solvers of the hemi-cube method
 VISIBILITY_VARIANTS = ("hemicube", "plain", "tessellated", "search", "guarded")  # visibility.hemisphere.VARIANTS
 KERNELS = ("exact", "disk")
 SHOOTING_POINTS = ("centroid", "centre")
-DEFAULT_TOLERANCE = {"progressive": 1e-3, "hemicube": 1e-5}
+QUALITIES = ("draft", "good", "final")
+# what each quality sets (the dataclass defaults below are "good"); the bench measures what each
+# costs and reaches (README, "What accuracy costs"). Tolerances per method: progressive, the
+# unshot power left relative to the emitted; hemi-cube, the change per sweep relative to max B.
+QUALITY_PRESETS = {
+    "draft": {"solve": {"patch_size": 1.0, "elements": 2, "refinements": 3, "visibility_res": 256,
+                        "hemicube_res": 64, "hemicube_elements": 1},
+              "tolerance": {"progressive": 1e-2, "hemicube": 1e-3},
+              "lightmaps": {"direct_map_resolution": 512}},
+    "good": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
+                       "hemicube_res": 128, "hemicube_elements": 2},
+             "tolerance": {"progressive": 1e-3, "hemicube": 1e-5},
+             "lightmaps": {"direct_map_resolution": 1024}},
+    "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 6, "visibility_res": 1024,
+                        "hemicube_res": 256, "hemicube_elements": 2},
+              "tolerance": {"progressive": 5e-4, "hemicube": 1e-5},
+              "lightmaps": {"direct_map_resolution": 2048}},
+}
+DEFAULT_TOLERANCE = QUALITY_PRESETS["good"]["tolerance"]
 
 PATCH_SIZE = 0.5  # scene units (metres): faces longer than this are split into patches
 MAX_SPLIT = 64  # patches along one side of a surface in the Patch Size mode
@@ -26,7 +45,8 @@ CONTENTS = ("light", "combined")  # what a lightmap holds: the light H arriving 
 
 @dataclass
 class SolveSettings:
-    method: str = "progressive"
+    method: str = "progressive"  # or hemicube, or auto (what `preset` gives: the cost model picks)
+    quality: str = "good"  # the preset the other fields came from (its tolerances when tolerance is None)
     subdiv: int | None = None  # N: every surface split N x N into patches; None: split by patch_size
     patch_size: float = PATCH_SIZE  # with subdiv None: longest patch side in scene units
     elements: int = 4  # S x S elements per patch (progressive), S a power of two
@@ -43,16 +63,26 @@ class SolveSettings:
     shoot_from: str = "centroid"  # progressive: visibility map from the unshot power's centroid | centre
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
     skip_unneeded: bool = True  # simulate only the effects the scene calls for (scene.analysis)
-    refinements: int = 2  # rounds of splitting patches where the direct light changes fast, before the solve
+    refinements: int = 5  # rounds of splitting patches where the direct light changes fast, before the solve
     refine_threshold: float = 0.5  # split a patch whose light spreads more than this fraction of its mean
+
+    @classmethod
+    def preset(cls, quality: str = "good", **given) -> "SolveSettings":
+        """The settings of a quality preset, with the fields in `given` set as given."""
+        if quality not in QUALITY_PRESETS:
+            raise SolveError(f"unknown quality '{quality}' (choose {', '.join(QUALITIES)})")
+        return cls(**(QUALITY_PRESETS[quality]["solve"] | {"method": "auto", "quality": quality} | given))
 
     @property
     def effective_tolerance(self) -> float:
-        return self.tolerance if self.tolerance is not None else DEFAULT_TOLERANCE[self.method]
+        """The tolerance given, or the quality's for this method (an auto method is resolved first)."""
+        if self.tolerance is not None:
+            return self.tolerance
+        return QUALITY_PRESETS[self.quality]["tolerance"]["progressive" if self.method == "auto" else self.method]
 
     def validate(self) -> None:
         """Refuse settings no solve can use, with a message naming the setting."""
-        choices = {"method": METHODS, "solver": SOLVERS, "visibility": VISIBILITY_VARIANTS,
+        choices = {"method": METHODS, "quality": QUALITIES, "solver": SOLVERS, "visibility": VISIBILITY_VARIANTS,
                    "kernel": KERNELS, "shoot_from": SHOOTING_POINTS}
         for name, allowed in choices.items():
             value = getattr(self, name)
@@ -91,6 +121,13 @@ class LightmapSettings:
     content: str = "light"  # "light": H, shown as emission + albedo x lightmap; "combined": B = E + ρH
     direct_per_texel: bool = True  # lamps' and emitters' light recomputed at every texel (sharp shadows)
     direct_map_resolution: int = 1024  # pixels across the visibility maps of that direct light
+
+    @classmethod
+    def preset(cls, quality: str = "good", **given) -> "LightmapSettings":
+        """The lightmap settings of a quality preset, with the fields in `given` set as given."""
+        if quality not in QUALITY_PRESETS:
+            raise SolveError(f"unknown quality '{quality}' (choose {', '.join(QUALITIES)})")
+        return cls(**(QUALITY_PRESETS[quality]["lightmaps"] | given))
 
     def validate(self) -> None:
         if not (math.isfinite(self.texel_density) and self.texel_density > 0):

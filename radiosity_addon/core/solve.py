@@ -7,11 +7,14 @@ same settings checks, emitter check, timings and report.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from .gpu import GPU, open_gpu
 from .hemicube import solve_hemicube
+from .hemicube.form_factors import check_memory
+from .method_choice import choose_method
 from .progressive import solve_progressive
 from .report import Counts, Report
 from .scene import Scene, check_has_emitter, effects_for, subdivide
@@ -44,7 +47,13 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
         if scene.material_maps:
             with timer.stage("materials"):
                 patches.reflectance, patches.emission = patch_material_values(solve_gpu, scene, patches)
+        if settings.method == "hemicube":  # refuse before any GPU work: refinement only adds patches
+            check_memory(len(patches), settings.memory_limit_bytes, settings.hemicube_elements)
         patches, refined = refine(solve_gpu, scene, patches, backs, settings, effects, timer)
+        choice = None
+        if settings.method == "auto":
+            choice = choose_method(patches, settings)
+            settings = replace(settings, method=choice.method)
         result = _solve_patches(solve_gpu, scene, patches, settings, effects, timer, progress, should_cancel,
                                 preview, preview_interval)
     radiosity, elements, light, element_light, direct, element_direct, details = result
@@ -54,7 +63,8 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
                     counts=Counts(surfaces=len(scene), objects=len(scene.object_names), patches=len(patches),
                                   elements=element_count),
                     timings=timer.timings, effects=effects, details=details,
-                    radiosity_max=float(np.max(radiosity)), refined=refined)
+                    radiosity_max=float(np.max(radiosity)), refined=refined,
+                    method_choice=choice.as_dict() if choice is not None else None)
     return Solution(patches=patches, patch_radiosity=np.asarray(radiosity, dtype=np.float64),
                     element_radiosity=elements, report=report, patch_light=np.asarray(light, dtype=np.float64),
                     element_light=element_light, patch_direct=np.asarray(direct, dtype=np.float64),

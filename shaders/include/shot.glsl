@@ -68,6 +68,10 @@ bool hemicube_sees(int slot, vec3 q, int plane) {
     ivec2 pixel = ivec2(floor(vec2(0.5 * (a / c + 1.0) * float(r), (b / c - up_min) / (1.0 - up_min) * float(rows))));
     ivec2 origin = ivec2(slot % hemicube_tiles_per_row, slot / hemicube_tiles_per_row) * ivec2(r, 3 * r)
                  + ivec2(0, row0);
+    pixel = clamp(pixel, ivec2(0), ivec2(r - 1, rows - 1));
+    if (on_plane(texelFetch(hemicubes, origin + pixel, 0).r, plane)) {
+        return true;  // most receivers: no search
+    }
     bool found = false;
     for (int dy = -SEARCH_RADIUS; dy <= SEARCH_RADIUS; ++dy) {
         for (int dx = -SEARCH_RADIUS; dx <= SEARCH_RADIUS; ++dx) {

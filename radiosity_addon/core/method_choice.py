@@ -1,0 +1,111 @@
+"""`--method auto`: the method predicted faster for these patches, from a cost model whose
+constants `python -m radiosity_addon.bench.calibrate` measured on the development machine (2 cores,
+llvmpipe; a faster GPU scales both methods' costs alike to first order, so the choice holds).
+
+Progressive refinement: shots ~ SHOTS_PER_PATCH(tolerance) x shooters, each drawing a hemi-cube
+(pixels, and every triangle on each of 5 faces) and gathered by every element.
+Hemi-cube method: a hemi-cube per receiving element (S_h^2 per patch), then Jacobi sweeps over
+the P x P matrix (~log(tolerance) / log(mean reflectance) sweeps); its matrices must fit the
+memory limit, else it is not a choice at all.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .hemicube.form_factors import matrix_bytes
+from .scene import Patches
+from .settings import SolveSettings
+from .shooting.shots import hemicube_resolution
+
+# measured by python -m radiosity_addon.bench.calibrate (2 cores, llvmpipe; load average 5.5, the
+# development machine busy with other jobs: absolute numbers ~2-3x high, their ratios hold)
+HEMICUBE_SECONDS = {"pixel": 4.92e-08, "triangle": 6.43e-08}  # a hemi-cube drawn, reduced, read back
+SHOT_SECONDS = {"pixel": 5.18e-09, "triangle": 1.21e-07, "element": 3.4e-07}  # a progressive shot
+SECONDS_PER_MATRIX_ENTRY_SWEEP = 3.93e-09
+SHOTS_PER_PATCH = {0.01: 2.62, 0.003: 3.56, 0.001: 4.40}  # progressive, Cornell box, by tolerance
+ELEMENT_BYTES = 2 * 16 + 8  # light and residual texels (RGBA32F) and their share of the patch buffers
+
+
+@dataclass
+class Prediction:
+    seconds: float
+    bytes: int
+    feasible: bool = True
+    why_not: str = ""
+
+
+@dataclass
+class MethodChoice:
+    method: str
+    reason: str
+    predicted: dict  # method -> {"seconds", "bytes", "feasible"}
+
+    def as_dict(self) -> dict:
+        return {"method": self.method, "reason": self.reason, "predicted": self.predicted}
+
+
+def shots_per_patch(tolerance: float) -> float:
+    """Interpolated in log(tolerance) through the measured points (extrapolated linearly)."""
+    points = sorted(SHOTS_PER_PATCH.items())
+    x = np.log([t for t, _ in points])
+    y = np.array([s for _, s in points])
+    slope = (y[-1] - y[0]) / (x[-1] - x[0])
+    value = np.interp(math.log(tolerance), x, y, left=np.nan, right=np.nan)
+    if np.isnan(value):
+        value = y[0] + slope * (math.log(tolerance) - x[0])
+    return float(max(value, 1.0))
+
+
+def hemicube_seconds(costs: dict, resolution: int, triangles: int) -> float:
+    """A hemi-cube of top face `resolution` over `triangles`: 3 R^2 pixels, every triangle on 5 faces."""
+    return costs["pixel"] * 3 * resolution ** 2 + costs["triangle"] * 5 * triangles
+
+
+def predict_progressive(patches: Patches, settings: SolveSettings, shooters: int | None = None) -> Prediction:
+    count = len(patches)
+    triangles = int(np.where(patches.is_triangle, 1, 2).sum())
+    elements = count * settings.elements ** 2
+    shots = shots_per_patch(settings.effective_tolerance if settings.method != "auto"
+                            else replace(settings, method="progressive").effective_tolerance)
+    shots *= shooters if shooters is not None else count
+    seconds = shots * (hemicube_seconds(SHOT_SECONDS, hemicube_resolution(settings.visibility_res), triangles)
+                       + SHOT_SECONDS["element"] * elements)
+    return Prediction(seconds=seconds, bytes=elements * ELEMENT_BYTES)
+
+
+def predict_hemicube(patches: Patches, settings: SolveSettings, mean_reflectance: float) -> Prediction:
+    count = len(patches)
+    triangles = int(np.where(patches.is_triangle, 1, 2).sum())
+    need = matrix_bytes(count, settings.hemicube_elements)
+    tolerance = replace(settings, method="hemicube").effective_tolerance
+    sweeps = math.log(tolerance) / math.log(min(max(mean_reflectance, 0.05), 0.99))
+    seconds = (count * settings.hemicube_elements ** 2 * hemicube_seconds(HEMICUBE_SECONDS, settings.hemicube_res,
+                                                                          triangles)
+               + SECONDS_PER_MATRIX_ENTRY_SWEEP * count ** 2 * sweeps)
+    if need > settings.memory_limit_bytes:
+        return Prediction(seconds=seconds, bytes=need, feasible=False,
+                          why_not=f"its matrices need {need / 2**30:.1f} GiB (limit"
+                                  f" {settings.memory_limit_bytes / 2**30:.1f} GiB)")
+    return Prediction(seconds=seconds, bytes=need)
+
+
+def choose_method(patches: Patches, settings: SolveSettings, shooters: int | None = None) -> MethodChoice:
+    """The faster feasible method for these patches, and why."""
+    area = patches.area
+    mean_reflectance = float((area * patches.reflectance.mean(axis=1)).sum() / area.sum())
+    predictions = {"progressive": predict_progressive(patches, settings, shooters),
+                   "hemicube": predict_hemicube(patches, settings, mean_reflectance)}
+    table = {name: {"seconds": round(p.seconds, 2), "bytes": int(p.bytes), "feasible": p.feasible}
+             for name, p in predictions.items()}
+    progressive, hemicube = predictions["progressive"], predictions["hemicube"]
+    if not hemicube.feasible:
+        return MethodChoice("progressive", f"hemi-cube method not possible: {hemicube.why_not}", table)
+    chosen = "hemicube" if hemicube.seconds < progressive.seconds else "progressive"
+    other = "progressive" if chosen == "hemicube" else "hemicube"
+    reason = (f"{len(patches)} patches: predicted {predictions[chosen].seconds:.2g} s against"
+              f" {predictions[other].seconds:.2g} s for the {other} method")
+    return MethodChoice(chosen, reason, table)
