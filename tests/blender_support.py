@@ -118,3 +118,13 @@ def lightmap_wiring(material) -> dict | None:
         return None
     return {"image": texture.image.name if texture.image else None, "interpolation": texture.interpolation,
             "uv_map": uv.uv_map}
+
+
+def inject_into_solver(monkeypatch, code: str) -> None:
+    """Run `code` in the solver process before its main: how the tests give it faults (it is a
+    process of its own, so patching this one changes nothing there)."""
+    from radiosity_addon.blender import worker
+
+    main = "from radiosity_addon.solver_process.child import main"
+    assert main in worker.BOOTSTRAP
+    monkeypatch.setattr(worker, "BOOTSTRAP", worker.BOOTSTRAP.replace(main, f"exec({code!r}); {main}"))
