@@ -7,6 +7,8 @@ the tests never read or write the developer's Blender configuration.
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -19,6 +21,22 @@ ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = ROOT / "sample_blends"
 CORNELL = SAMPLES / "cornell_box.blend"
 ROOM = SAMPLES / "room.blend"
+SAMPLES_MADE = SAMPLES / ".made"  # `make samples` and ensure_samples() touch it
+SAMPLE_SOURCES = (ROOT / "tools/make_sample_blends.py", ROOT / "radiosity_addon/bench/blend_scenes.py")
+
+
+def ensure_samples() -> None:
+    """sample_blends/ is made on demand (each Blender opens the files it made; 4.x cannot open 5.x
+    files): made here when missing or older than their generator."""
+    made = SAMPLES_MADE.stat().st_mtime if SAMPLES_MADE.exists() else 0.0
+    if made > max(source.stat().st_mtime for source in SAMPLE_SOURCES):
+        return
+    result = subprocess.run([sys.executable, str(SAMPLE_SOURCES[0])], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
+    SAMPLES_MADE.touch()
+
+
+ensure_samples()
 
 
 def ensure_addon() -> None:
