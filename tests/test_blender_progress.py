@@ -46,14 +46,30 @@ def test_the_bar_moves_with_time_and_never_goes_back():
 def test_a_solver_without_its_own_estimate_is_extrapolated():
     """The hemi-cube method reports a fraction only: linear in time here, 10 s in all."""
     clock = BakeClock(now=0.0)
-    for k in range(1, 50):
+    for k in range(1, 28):
         t = 0.5 + 0.2 * k
         clock.solving((t - 0.5) / 9.5, f"hemi-cubes {k}/50", None, now=t)
+        clock.fraction(now=t)  # the panel reads it ten times a second
     assert clock.fraction(now=6.0) == pytest.approx(6.0 / (10.0 + 0.05 * 9.5), abs=0.05)
+    for k in range(6, 100):
+        clock.fraction(now=0.1 * k)
     clock.laying_out_lightmaps(now=10.0)
     assert clock.stage == "writing lightmaps" and clock.fraction(now=10.2) > 0.9
     clock.finished()
     assert clock.fraction() == 1.0 and clock.seconds_left() is None
+
+
+def test_a_longer_estimate_slows_the_bar_down_without_stopping_or_leaping_it():
+    """Another program takes the CPU: the solver's estimate of time left jumps from 5 s to 50 s."""
+    clock = BakeClock(now=0.0)
+    shown = []
+    for k in range(10, 300):
+        t = 0.1 * k
+        clock.solving(0.5, "shot", 10.0 - t if t < 5 else 55.0 - t, now=t)
+        shown.append(clock.fraction(now=t))
+    steps = [b - a for a, b in zip(shown, shown[1:])]
+    assert min(steps[20:]) > 0 and max(steps) < 0.02, (min(steps[20:]), max(steps))
+    assert clock.seconds_left(now=29.9) == pytest.approx(25.1, abs=3.0)
 
 
 def test_one_estimate_in_text_short_enough_for_the_panel():

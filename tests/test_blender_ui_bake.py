@@ -31,10 +31,16 @@ core.solve = solve_until_cancelled
 
 
 class FakeWindowManager:
-    windows = ()
+    """One window with one 3D viewport in the given shading; records timers and progress."""
 
-    def __init__(self):
-        self.progress, self.timers, self.progress_ended = [], [], False
+    def __init__(self, shading="MATERIAL"):
+        self.progress, self.timers, self.progress_ended, self.redraws = [], [], False, 0
+        space = SimpleNamespace(type="VIEW_3D", shading=SimpleNamespace(type=shading))
+        area = SimpleNamespace(type="VIEW_3D", spaces=[space], tag_redraw=self.redrawn)
+        self.windows = [SimpleNamespace(screen=SimpleNamespace(areas=[area]))]
+
+    def redrawn(self):
+        self.redraws += 1
 
     def event_timer_add(self, interval, window=None):
         self.timers.append(object())
@@ -56,9 +62,9 @@ class FakeWindowManager:
 class ButtonBake:
     """The operator's invoke and modal with a stand-in window manager and status bar."""
 
-    def __init__(self, context, preview_interval=None):
+    def __init__(self, context, preview_interval=None, shading="MATERIAL"):
         self.status, self.reports = [], []
-        self.ui = SimpleNamespace(window_manager=FakeWindowManager(), window=None,
+        self.ui = SimpleNamespace(window_manager=FakeWindowManager(shading), window=None,
                                   workspace=SimpleNamespace(status_text_set=self.status.append))
         plan = prepare(context, context.scene.radiosity.bake_options(context.selected_objects),
                        preview_interval=preview_interval)
@@ -145,6 +151,19 @@ def test_live_preview_shows_the_light_building_up_then_the_final_images_replace_
         for slot in obj.material_slots:
             assert support.lightmap_wiring(slot.material)["image"] == f"{obj.name}_lightmap"
     bake.assert_ui_given_back()
+
+
+def test_a_solid_viewport_gets_no_preview_it_could_not_show():
+    context = support.open_blend(support.CORNELL, method="progressive", subdivision=4)
+    context.scene.radiosity.elements = "8"
+    bake = ButtonBake(context, preview_interval=0.3, shading="SOLID")
+    snapshots = []
+    take_preview = bake.plan.worker.take_preview
+    bake.plan.worker.take_preview = lambda: snapshots.append(take_preview()) or snapshots[-1]
+    assert bake.run_until() == {"FINISHED"}
+    assert snapshots == [] and bake.plan.preview is None
+    solid_redraws = bake.ui.window_manager.redraws
+    assert solid_redraws <= 2  # the viewport is redrawn when the bake ends, not for every snapshot
 
 
 def test_cancel_after_a_preview_restores_an_earlier_bake_and_unbaked_objects_exactly():

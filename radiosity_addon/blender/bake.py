@@ -94,12 +94,14 @@ def start(plan: BakePlan) -> None:
         raise BakeError(f"cannot start the solver process ({error.strerror or error})") from None
 
 
-def show_preview(plan: BakePlan) -> None:
-    """Show the newest snapshot of the solve, if one came since the last call."""
+def show_preview(plan: BakePlan) -> bool:
+    """Show the newest snapshot of the solve, if one came since the last call (then True)."""
     snapshot = plan.worker.take_preview()
-    if snapshot is not None:
-        plan.preview = plan.preview or LivePreview(plan.objects)
-        plan.preview.show(snapshot)
+    if snapshot is None:
+        return False
+    plan.preview = plan.preview or LivePreview(plan.objects)
+    plan.preview.show(snapshot)
+    return True
 
 
 def rollback(plan: BakePlan) -> None:

@@ -10,7 +10,7 @@ from . import operators, ui_bake
 
 # Blender draws labels on one line and cuts them: long lines are wrapped here, at a width from the
 # region's, with a conservative glyph width (the real-Blender tests measure the lines with blf)
-GLYPH_WIDTH = 7.0  # pixels per character of the UI font at scale 1, a little over its average
+GLYPH_WIDTH = 6.5  # pixels per character of the UI font at scale 1 (its average is about 5.7)
 LABEL_MARGIN = 50.0  # pixels of the region's width a label cannot use (panel padding, icon)
 SEPARATOR = " · "
 

@@ -27,16 +27,32 @@ class UIBake:
     window_manager: object
     workspace: object  # its status text
     timer: object  # the modal operator's
+    status: str | None = None  # the status text shown; the UI is redrawn only when it changes
 
 
 running: UIBake | None = None
 
 
-def redraw(window_manager) -> None:
+def redraw(window_manager, viewport: bool = True) -> None:
+    """The panel and the status bar; the 3D views only when they have something new to show (a
+    Material Preview redraw costs far more than the panel's)."""
+    kinds = {"PROPERTIES", "STATUSBAR", "VIEW_3D"} if viewport else {"PROPERTIES", "STATUSBAR"}
     for window in window_manager.windows:
         for area in window.screen.areas:
-            if area.type in {"PROPERTIES", "STATUSBAR", "VIEW_3D"}:
+            if area.type in kinds:
                 area.tag_redraw()
+
+
+def previews_visible(window_manager) -> bool:
+    """A 3D viewport shows materials (Material Preview or Rendered): the Solid view cannot show a
+    lightmap, so a preview for it would only cost the UI time."""
+    return any(space.type == "VIEW_3D" and space.shading.type in {"MATERIAL", "RENDERED"}
+               for window in window_manager.windows for area in window.screen.areas for space in area.spaces)
+
+
+def set_status(workspace, text: str | None) -> None:
+    """The status bar's text (None: Blender's own again); one place, so the tests can watch it."""
+    workspace.status_text_set(text)
 
 
 def begin(context, plan: BakePlan) -> UIBake:
@@ -57,12 +73,15 @@ def advance(bake: UIBake) -> bool:
     """One timer tick: the solver's news, the live preview, progress and status. True once it ended."""
     plan = bake.plan
     over = plan.worker.poll()
-    if not over and not plan.worker.cancelled:
-        show_preview(plan)
+    shown = (not over and not plan.worker.cancelled and previews_visible(bake.window_manager)
+             and show_preview(plan))
     clock = plan.worker.clock
     bake.window_manager.progress_update(clock.fraction())
-    bake.workspace.status_text_set("Radiosity bake: cancelling..." if plan.worker.cancelled else clock.status_line())
-    redraw(bake.window_manager)
+    status = "Radiosity bake: cancelling..." if plan.worker.cancelled else clock.status_line()
+    if status != bake.status or shown:  # the panel shows the same numbers as the status bar
+        bake.status = status
+        set_status(bake.workspace, status)
+        redraw(bake.window_manager, viewport=shown)
     return over
 
 
@@ -74,7 +93,7 @@ def release(bake: UIBake) -> None:
     try:
         bake.window_manager.event_timer_remove(bake.timer)
         bake.window_manager.progress_end()
-        bake.workspace.status_text_set(None)
+        set_status(bake.workspace, None)
     except ReferenceError:  # the window manager or workspace went with a file load
         pass
     for handlers, handler in HANDLERS:

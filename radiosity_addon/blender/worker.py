@@ -27,10 +27,13 @@ from .errors import BakeError
 from .progress import BakeClock
 
 SILENCE_LIMIT = 60.0  # seconds without a word from the child, heartbeats included: it hangs
-CANCEL_GRACE = 2.0  # seconds a cancelled child has to stop before it is killed
 # run by `python -I -c`: the parent's path, then the child's main (argv: sys.path as JSON, job folder)
 BOOTSTRAP = ("import sys, json; sys.path[:0] = json.loads(sys.argv[1]); "
              "from radiosity_addon.solver_process.child import main; sys.exit(main(sys.argv[2]))")
+
+
+# Windows: no console window, and a priority below Blender's (POSIX children lower their own)
+WINDOWS_FLAGS = getattr(subprocess, "CREATE_NO_WINDOW", 0) | getattr(subprocess, "BELOW_NORMAL_PRIORITY_CLASS", 0)
 
 
 def extension_root() -> Path:
@@ -65,7 +68,8 @@ def ended_badly(code: int) -> str:
 class BakeWorker:
     """One solve in a child process. start(); then poll() (or wait()) until it returns True, and
     read `result` or `error`; take_preview() gives the newest images of a progressive solve so far;
-    cancel() asks it to stop; discard() ends it and removes its files, whatever state it is in."""
+    cancel() ends it at once (it writes only into its own folder, so nothing can be half written);
+    discard() ends it and removes its files, whatever state it is in."""
 
     def __init__(self, scene: Scene, settings: SolveSettings, objects: list[str], lightmaps: LightmapSettings,
                  preview_interval: float | None = None):
@@ -81,7 +85,6 @@ class BakeWorker:
         self._lock = threading.Lock()
         self._messages: list[dict] = []  # read, not yet handled by the main thread
         self._last_heard = 0.0
-        self._cancel_deadline: float | None = None
         self._preview: str | None = None
         self._over = False
 
@@ -91,7 +94,7 @@ class BakeWorker:
                            self.preview_interval)
         self._process = subprocess.Popen(child_command(self.directory), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                          text=True, encoding="utf-8",
-                                         creationflags=getattr(subprocess, "CREATE_NO_WINDOW", 0))
+                                         creationflags=WINDOWS_FLAGS)
         self._last_heard = time.monotonic()
         self._reader = threading.Thread(target=self._read, name="radiosity-bake-pipe", daemon=True)
         self._reader.start()
@@ -106,21 +109,12 @@ class BakeWorker:
                     self._messages.append(message)
 
     def cancel(self) -> None:
-        if self.cancelled or self._over:
-            return
-        self.cancelled = True
-        self._cancel_deadline = time.monotonic() + CANCEL_GRACE
-        self._tell(protocol.CANCEL)
-
-    def _tell(self, line: str) -> None:
-        try:
-            self._process.stdin.write(line + "\n")
-            self._process.stdin.flush()
-        except (OSError, ValueError):  # it has ended already
-            pass
+        if not self.cancelled and not self._over:
+            self.cancelled = True
+            self._process.kill()
 
     def poll(self) -> bool:
-        """Handle what the child said; kill it if it hangs or ignores a cancel. True once it is over."""
+        """Handle what the child said; kill it if it hangs. True once it is over."""
         if self._over:
             return True
         with self._lock:
@@ -129,12 +123,10 @@ class BakeWorker:
         for message in messages:
             self._handle(message)
         if self._process.poll() is None:
-            if self._cancel_deadline is not None and time.monotonic() > self._cancel_deadline:
-                self._kill()
-            elif silent > SILENCE_LIMIT and self.error is None:
+            if silent > SILENCE_LIMIT and self.error is None:
                 self.error = BakeError(f"the solver stopped responding for {silent:.0f} s (a hung OpenGL driver?);"
                                        f" nothing was changed")
-                self._kill()
+                self._process.kill()
             return False
         self._reader.join(5.0)  # its last messages
         with self._lock:
@@ -158,8 +150,6 @@ class BakeWorker:
             self.result = SolveResult(protocol.load_images(self.directory / message["file"]), message["report"],
                                       message["summary"])
             self.clock.finished()
-        elif kind == "cancelled":
-            self.error = SolveCancelled("cancelled")
         elif kind == "error" and self.error is None:
             self.error = BakeError(message["message"] if message["user"] else
                                    f"the solver failed unexpectedly ({message['message']}); nothing was changed,"
@@ -171,10 +161,6 @@ class BakeWorker:
             self.error = SolveCancelled("cancelled")
         elif self.result is None and self.error is None:
             self.error = BakeError(ended_badly(code))
-
-    def _kill(self) -> None:
-        self._process.kill()
-        self._process.wait()
 
     def take_preview(self) -> dict | None:
         """The newest preview images not taken yet (object name -> RGBA), or None."""
@@ -200,12 +186,13 @@ class BakeWorker:
 
     def discard(self) -> None:
         """End the child (if it still runs) and remove its files; the result is dropped."""
-        if self._process is not None and self._process.poll() is None:
-            self._kill()
         if self._process is not None:
+            if self._process.poll() is None:
+                self._process.kill()
             try:
                 self._process.stdin.close()
-            except OSError:
+                self._process.wait(5.0)  # Windows removes no file of a running process
+            except (OSError, subprocess.TimeoutExpired):
                 pass
         self._over = True
         if self.directory is not None:

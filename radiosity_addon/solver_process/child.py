@@ -21,6 +21,7 @@ from .. import core
 from . import protocol
 
 PROGRESS_INTERVAL = 0.1  # seconds between progress messages (the solver reports every shot)
+NICENESS = 10  # below Blender: its UI gets the CPU first (Windows: the parent asks for below normal)
 
 
 class Pipe:
@@ -40,12 +41,11 @@ class Pipe:
             self._file.flush()
 
 
-def watch_parent(cancel: threading.Event) -> None:
-    """'cancel' on stdin stops the solve at its next check; stdin closing means the parent is gone
-    (Blender quit or crashed): end at once, whatever the solver is doing."""
-    for line in sys.stdin:
-        if line.strip() == protocol.CANCEL:
-            cancel.set()
+def watch_parent() -> None:
+    """stdin closing means the parent is gone (Blender quit or crashed): end at once, whatever the
+    solver is doing. (A cancel simply kills this process: it writes nothing outside its folder.)"""
+    for _line in sys.stdin:
+        pass
     os._exit(3)
 
 
@@ -72,8 +72,8 @@ def lightmap_images(scene, solution, objects: list[str], settings, gpu) -> dict:
 class Solve:
     """One job: the solve with throttled progress, previews as files, the result as a file."""
 
-    def __init__(self, directory: Path, pipe: Pipe, cancel: threading.Event):
-        self.directory, self.pipe, self.cancel = directory, pipe, cancel
+    def __init__(self, directory: Path, pipe: Pipe):
+        self.directory, self.pipe = directory, pipe
         self.last_progress = 0.0
         self.previews = 0
 
@@ -98,26 +98,23 @@ class Solve:
         with core.open_gpu() as gpu:
             preview = (self.preview(scene, lightmap_settings, objects, gpu)
                        if preview_interval and solve_settings.method == "progressive" else None)
-            solution = core.solve(scene, solve_settings, progress=self.progress, should_cancel=self.cancel.is_set,
-                                  gpu=gpu, preview=preview, preview_interval=preview_interval or 2.0)
+            solution = core.solve(scene, solve_settings, progress=self.progress, gpu=gpu, preview=preview,
+                                  preview_interval=preview_interval or 2.0)
             self.pipe.send("stage", name="lightmaps")
             images = lightmap_images(scene, solution, objects, lightmap_settings, gpu)
-        if self.cancel.is_set():
-            raise core.SolveCancelled("cancelled")
         protocol.save_images(self.directory / protocol.RESULT_FILE, images)
         report = solution.report
         self.pipe.send("result", file=protocol.RESULT_FILE, report=report.to_dict(), summary=report.summary_line())
 
 
 def main(job_dir: str) -> int:
+    if hasattr(os, "nice"):
+        os.nice(NICENESS)
     pipe = Pipe()
-    cancel = threading.Event()
-    threading.Thread(target=watch_parent, args=(cancel,), name="watch-parent", daemon=True).start()
+    threading.Thread(target=watch_parent, name="watch-parent", daemon=True).start()
     threading.Thread(target=heartbeat, args=(pipe,), name="heartbeat", daemon=True).start()
     try:
-        Solve(Path(job_dir), pipe, cancel).run()
-    except core.SolveCancelled:
-        pipe.send("cancelled")
+        Solve(Path(job_dir), pipe).run()
     except core.USER_ERRORS as error:
         pipe.send("error", user=True, message=one_line(error))
     except Exception as error:  # a bug: the details on stderr (Blender's console), one line for the user

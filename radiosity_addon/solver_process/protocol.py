@@ -9,9 +9,9 @@ Messages (child -> parent): {"kind": KIND, ...} with KIND one of
   stage     name ("lightmaps": the solve is done, the images are being laid out)
   preview   file (an .npz of the images so far, the ambient term included)
   result    file (.npz), report (Report.to_dict()), summary (Report.summary_line())
-  cancelled
   error     user (a fault the user can fix, else a bug or a crash), message (one line)
-Parent -> child, on stdin: "cancel\\n"; closing stdin (the parent is gone) ends the child at once.
+Parent -> child: nothing; its stdin closing (the parent is gone) ends the child at once, and a
+cancel kills it (it writes nothing outside its own folder).
 """
 
 from __future__ import annotations
@@ -28,7 +28,6 @@ SCENE_FILE = "scene.json"
 JOB_FILE = "job.json"
 RESULT_FILE = "result.npz"
 HEARTBEAT = 1.0  # seconds between "alive" messages
-CANCEL = "cancel"
 
 
 def write_job(directory: Path, scene, solve: core.SolveSettings, lightmaps: core.LightmapSettings,
