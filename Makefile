@@ -5,8 +5,11 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.requirements-installed
 OUT ?= out
+RIG := tools/blender_rig.sh
+RIG_5_2 ?= /var/cache/blender-rig
+RIG_4_3 ?= /var/cache/blender-rig-trixie
 
-.PHONY: setup check-system demo test bench bench-quick extension samples clean
+.PHONY: setup check-system demo test test-blender rigs bench bench-quick extension samples clean
 
 setup: check-system $(STAMP)
 
@@ -30,6 +33,16 @@ demo: setup sample_blends/.made
 
 test: setup
 	$(PY) -m pytest
+
+# the real-Blender tier: the zip installed into Debian's Blender 5.2.2 and 4.3.2 (roots made by
+# tools/blender_rig.sh: needs root, debootstrap and a Debian mirror; ~1-3 min each the first time),
+# headless bakes, and the UI under Xvfb; screenshots and measurements in $(OUT)/real-blender/
+test-blender: extension rigs
+	BLENDER_RIG_DIR_5_2=$(RIG_5_2) BLENDER_RIG_DIR_4_3=$(RIG_4_3) $(PY) -m pytest tests/real_blender
+
+rigs:
+	BLENDER_RIG_SUITE=sid $(RIG) setup $(RIG_5_2)
+	BLENDER_RIG_SUITE=trixie $(RIG) setup $(RIG_4_3)
 
 # dist/radiosity_baker-<version>-<platform>.zip for linux-x64, windows-x64, macos-arm64
 # (downloads the moderngl/glcontext wheels into wheels/, builds and validates with Blender's tool)
