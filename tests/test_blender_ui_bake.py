@@ -125,10 +125,9 @@ def preview_images():
 
 
 def test_live_preview_shows_the_light_building_up_then_the_final_images_replace_it():
-    context = support.open_blend(support.CORNELL, method="progressive", subdivision=4)
-    context.scene.radiosity.elements = "8"  # a solve long enough for a few previews
+    context = support.open_blend(support.CORNELL, method="progressive", subdivision=3)
     objects = sorted(obj.name for obj in context.selected_objects)
-    bake = ButtonBake(context, preview_interval=0.3)
+    bake = ButtonBake(context, preview_interval=0.2)
     snapshots = []
 
     def record():
@@ -155,26 +154,22 @@ def test_live_preview_shows_the_light_building_up_then_the_final_images_replace_
 
 def test_a_solid_viewport_gets_no_preview_it_could_not_show():
     context = support.open_blend(support.CORNELL, method="progressive", subdivision=4)
-    context.scene.radiosity.elements = "8"
-    bake = ButtonBake(context, preview_interval=0.3, shading="SOLID")
-    snapshots = []
-    take_preview = bake.plan.worker.take_preview
-    bake.plan.worker.take_preview = lambda: snapshots.append(take_preview()) or snapshots[-1]
-    assert bake.run_until() == {"FINISHED"}
-    assert snapshots == [] and bake.plan.preview is None
-    solid_redraws = bake.ui.window_manager.redraws
-    assert solid_redraws <= 2  # the viewport is redrawn when the bake ends, not for every snapshot
+    bake = ButtonBake(context, preview_interval=0.2, shading="SOLID")
+    bake.run_until(lambda: bake.plan.worker._preview is not None)  # a snapshot came, and waits unshown
+    assert bake.plan.preview is None and preview_images() == []
+    assert bake.ui.window_manager.redraws == 0  # nor was the viewport redrawn for it
+    bake.tick("ESC")
+    assert bake.run_until() == {"CANCELLED"}
 
 
 def test_cancel_after_a_preview_restores_an_earlier_bake_and_unbaked_objects_exactly():
-    context = support.open_blend(support.CORNELL, method="progressive", subdivision=4)
-    context.scene.radiosity.elements = "8"
+    context = support.open_blend(support.CORNELL, method="progressive", subdivision=3)
     meshes = list(context.selected_objects)
     support.select_only([bpy.data.objects["floor"]])
     assert bpy.ops.radiosity.bake() == {"FINISHED"}  # the floor shows an earlier bake, the rest none
     support.select_only(meshes)
     before = support.blend_state()
-    bake = ButtonBake(context, preview_interval=0.3)
+    bake = ButtonBake(context, preview_interval=0.2)
     bake.run_until(lambda: bake.plan.preview is not None)
     floor_material = bpy.data.objects["floor"].material_slots[0].material
     assert support.lightmap_wiring(floor_material)["image"] == "floor_lightmap" + PREVIEW_SUFFIX
