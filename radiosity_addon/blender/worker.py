@@ -27,12 +27,13 @@ from .errors import BakeError
 from .progress import BakeClock
 
 SILENCE_LIMIT = 60.0  # seconds without a word from the child, heartbeats included: it hangs
-# run by `python -I -c`: the parent's path, then the child's main (argv: sys.path as JSON, job folder)
-BOOTSTRAP = ("import sys, json; sys.path[:0] = json.loads(sys.argv[1]); "
+NICENESS = 10  # the child's priority below Blender's, so the UI gets the CPU first
+# run by `python -I -c`: lower its priority before anything else (its imports are work too), the
+# parent's path, then the child's main (argv: sys.path as JSON, the job folder)
+BOOTSTRAP = (f"import os, sys, json; hasattr(os, 'nice') and os.nice({NICENESS}); "
+             "sys.path[:0] = json.loads(sys.argv[1]); "
              "from radiosity_addon.solver_process.child import main; sys.exit(main(sys.argv[2]))")
-
-
-# Windows: no console window, and a priority below Blender's (POSIX children lower their own)
+# Windows: no console window, and a priority below Blender's (it has no os.nice)
 WINDOWS_FLAGS = getattr(subprocess, "CREATE_NO_WINDOW", 0) | getattr(subprocess, "BELOW_NORMAL_PRIORITY_CLASS", 0)
 
 

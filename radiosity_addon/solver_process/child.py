@@ -21,7 +21,6 @@ from .. import core
 from . import protocol
 
 PROGRESS_INTERVAL = 0.1  # seconds between progress messages (the solver reports every shot)
-NICENESS = 10  # below Blender: its UI gets the CPU first (Windows: the parent asks for below normal)
 
 
 class Pipe:
@@ -108,8 +107,6 @@ class Solve:
 
 
 def main(job_dir: str) -> int:
-    if hasattr(os, "nice"):
-        os.nice(NICENESS)
     pipe = Pipe()
     threading.Thread(target=watch_parent, name="watch-parent", daemon=True).start()
     threading.Thread(target=heartbeat, args=(pipe,), name="heartbeat", daemon=True).start()

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-from rig_support import RIG, RIG_DIRS, ROOT, ZIP, Blender
+from rig_support import ARTEFACTS, RIG, RIG_DIRS, ROOT, ZIP, Blender
 
 
 def rig_ready(rig_dir: str) -> bool:
@@ -32,8 +33,8 @@ def installed_blender(version: str, extension_zip: Path, tmp_path_factory) -> Bl
     rig_dir = RIG_DIRS[version]
     if not rig_ready(rig_dir):
         pytest.fail(f"no Blender {version} root at {rig_dir}: run `make test-blender`, which sets it up")
+    shutil.rmtree(ARTEFACTS / version, ignore_errors=True)  # this run's screenshots and records only
     blender = Blender(version, rig_dir, tmp_path_factory.mktemp(f"blender-{version}-user"))
-    (blender.artefacts / "blender.log").unlink(missing_ok=True)
     installed = blender.run("--command", "extension", "install-file", "-r", "user_default", "-e", str(extension_zip))
     assert installed.returncode == 0 and 'Installed "radiosity_baker"' in installed.stdout, installed.stdout[-2000:]
     made = blender.run("-b", "--factory-startup", "--python", str(ROOT / "tools/make_sample_blends.py"), "--",
