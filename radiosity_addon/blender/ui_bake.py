@@ -9,6 +9,7 @@ a finish leaves the file as it was (a save during a bake saves it so, too).
 
 from __future__ import annotations
 
+import traceback
 from dataclasses import dataclass
 
 import bpy
@@ -118,9 +119,12 @@ def interrupt(why: str, keep_data: bool = True) -> None:
     if bake is None:
         return
     release(bake)
-    if keep_data:
-        rollback(bake.plan)
-    else:
+    try:
+        if keep_data:
+            rollback(bake.plan)
+    except Exception:  # a bug: say so on the console, but never leave the add-on stuck
+        traceback.print_exc()
+    finally:
         bake.plan.worker.discard()
     print(f"Radiosity bake: cancelled ({why}); nothing was changed")
 

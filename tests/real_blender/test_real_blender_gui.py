@@ -96,7 +96,7 @@ def test_esc_cancels_at_once_and_restores_the_file(session):
     ended_cleanly(esc)
     # the add-on's part, from the operator's cancel to the end; Blender's own handling of the key
     # comes first (seconds when Material Preview compiles shaders on llvmpipe), it is recorded
-    assert esc["preview_shown"] and esc["ended_after_cancel"] <= 0.5 and esc["poll_after"], esc
+    assert esc["preview_shown"] and esc["ended_after_cancel"] <= 1.0 and esc["poll_after"], esc
     assert any("cancelled" in line for line in esc["reports"]), esc["reports"]
 
 
