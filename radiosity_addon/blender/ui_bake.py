@@ -9,6 +9,7 @@ a finish leaves the file as it was (a save during a bake saves it so, too).
 
 from __future__ import annotations
 
+import time
 import traceback
 from dataclasses import dataclass
 
@@ -18,6 +19,7 @@ from bpy.app.handlers import persistent
 from .bake import BakePlan, finish, rollback, show_preview, start
 
 TIMER_INTERVAL = 0.1  # seconds between the modal timer's ticks
+REDRAW_INTERVAL = 0.25  # at most four redraws of the panel and status bar a second (llvmpipe: ~30 ms each)
 PREVIEW_INTERVAL = 2.0  # seconds between live previews of a progressive bake
 BUSY = "a radiosity bake is running (Esc cancels it)"
 
@@ -29,6 +31,7 @@ class UIBake:
     workspace: object  # its status text
     timer: object  # the modal operator's
     status: str | None = None  # the status text shown; the UI is redrawn only when it changes
+    redrawn_at: float = 0.0
 
 
 running: UIBake | None = None
@@ -79,8 +82,9 @@ def advance(bake: UIBake) -> bool:
     clock = plan.worker.clock
     bake.window_manager.progress_update(clock.fraction())
     status = "Radiosity bake: cancelling..." if plan.worker.cancelled else clock.status_line()
-    if status != bake.status or shown:  # the panel shows the same numbers as the status bar
-        bake.status = status
+    now = time.monotonic()
+    if shown or (status != bake.status and now - bake.redrawn_at >= REDRAW_INTERVAL):
+        bake.status, bake.redrawn_at = status, now  # the panel shows the same numbers as the status bar
         set_status(bake.workspace, status)
         redraw(bake.window_manager, viewport=shown)
     return over

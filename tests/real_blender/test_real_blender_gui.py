@@ -49,16 +49,20 @@ def test_the_bake_button_bakes_with_progress_that_moves_with_time(session):
 
 def test_the_session_ran_every_case_and_blender_quit_normally(session):
     assert "script_error" not in session, session["script_error"]
-    assert session["done"] == ["responsive", "bake", "undo", "esc", "crash", "revert", "disable"]
+    assert session["done"] == ["bake", "responsive", "undo", "esc", "crash", "revert", "disable"]
     assert session["_exit_status"] == 0, session["_output_tail"]
 
 
 def test_the_ui_stays_responsive_during_a_bake(session):
-    """Measured here, in the real Blender: a 50 ms timer and the Properties editor's redraws."""
-    ui = case(session, "responsive")["ui"]
-    assert ui["timer_ticks"] > 10 * ui["seconds"], ui  # 20 asked per second
-    assert ui["timer_gap_max"] <= MAX_UI_GAP, (ui, session["responsive"]["long_gaps"])
-    assert ui["redraws"] > ui["seconds"] and ui["redraw_gap_max"] <= 2.0, ui  # the panel keeps moving
+    """Measured here, in the real Blender, while the solver runs: a 50 ms timer on the main thread,
+    and the Properties editor's redraws once there is an estimate to show (the panel is redrawn
+    when what it shows changes, at most four times a second). Writing the result into the file at
+    the end is main-thread work; it is recorded (ui_applying), not held to this."""
+    bake = case(session, "responsive")
+    ui, moving = bake["ui"], bake["ui_estimated"]
+    assert ui["timer_ticks"] > 15 * ui["seconds"], ui  # 20 asked per second
+    assert ui["timer_gap_max"] <= MAX_UI_GAP, (ui, bake["long_gaps"])
+    assert moving["redraws"] >= moving["seconds"] and moving["redraw_gap_max"] <= 1.5, moving
 
 
 def test_the_viewport_shows_the_light_building_up(session, blender):
@@ -82,7 +86,11 @@ def test_the_panels_text_fits_and_the_summary_wraps(session):
 
 
 def test_ctrl_z_undoes_the_bake_and_only_the_bake(session):
-    assert case(session, "undo") == {"after_undo_is_before_bake": True, "moved_by": 0.05, "second_undo_moved_by": 0.0}
+    """An edit, a bake, a re-bake; then Ctrl+Z three times: one step each (the last one the edit,
+    which the file's bake state does not see)."""
+    assert case(session, "undo") == [{"is_first_bake": True, "is_unbaked": False, "moved_by": 0.05},
+                                     {"is_first_bake": False, "is_unbaked": True, "moved_by": 0.05},
+                                     {"is_first_bake": False, "is_unbaked": True, "moved_by": 0.0}]
 
 
 def ended_cleanly(record: dict) -> None:

