@@ -119,8 +119,8 @@ def file_state() -> dict:
         "uv_maps": sorted(f"{o.data.name}/{uv.name}" for o in meshes for uv in o.data.uv_layers),
         "slots": sorted(f"{o.name}/{s.link}/{s.material.name if s.material else ''}"
                         for o in meshes for s in o.material_slots),
-        # read as stored, so it reads the same with the add-on disabled
-        "last_bake": (bpy.context.scene.get("radiosity") or {}).get("last_bake", ""),
+        # None once the add-on is disabled (Blender 5 keeps registered properties out of reach)
+        "last_bake": getattr(getattr(bpy.context.scene, "radiosity", None), "last_bake", None),
     }
 
 
