@@ -173,10 +173,6 @@ class BakeWorker:
         path.unlink(missing_ok=True)
         return images
 
-    @property
-    def done(self) -> bool:
-        return self.poll()
-
     def wait(self, timeout: float | None = None) -> bool:
         deadline = None if timeout is None else time.monotonic() + timeout
         while not self.poll():
