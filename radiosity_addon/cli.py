@@ -195,7 +195,8 @@ def command_bake(args) -> int:
     request = HeadlessBake(file=args.file, solve_options=given_solver_options(args), lightmap_options=lightmap_options,
                            objects=args.objects, output_dir=args.output_dir, save_as=args.save_as,
                            preview=args.preview, preview_size=args.preview_size)
-    summary, report = bake_file(request, progress=(lambda p: progress(p.fraction, p.message, {})) if progress else None)
+    summary, report = bake_file(request, progress=(lambda clock: progress(clock.fraction(), clock.stage, {}))
+                                if progress else None)
     PROGRESS.end()
     write_report(report, args.report)
     print(summary)

@@ -7,18 +7,37 @@ the tests never read or write the developer's Blender configuration.
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
 os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="radiosity-blender-user-")
 
 import bpy  # noqa: E402
-import numpy as np  # noqa: E402
+
+from blend_inspection import image_rgba, lightmap_wiring  # noqa: E402,F401  (the tests use them from here)
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = ROOT / "sample_blends"
 CORNELL = SAMPLES / "cornell_box.blend"
 ROOM = SAMPLES / "room.blend"
+SAMPLES_MADE = SAMPLES / ".made"  # `make samples` and ensure_samples() touch it
+SAMPLE_SOURCES = (ROOT / "tools/make_sample_blends.py", ROOT / "radiosity_addon/bench/blend_scenes.py")
+
+
+def ensure_samples() -> None:
+    """sample_blends/ is made on demand (each Blender opens the files it made; 4.x cannot open 5.x
+    files): made here when missing or older than their generator."""
+    made = SAMPLES_MADE.stat().st_mtime if SAMPLES_MADE.exists() else 0.0
+    if made > max(source.stat().st_mtime for source in SAMPLE_SOURCES):
+        return
+    result = subprocess.run([sys.executable, str(SAMPLE_SOURCES[0])], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
+    SAMPLES_MADE.touch()
+
+
+ensure_samples()
 
 
 def ensure_addon() -> None:
@@ -98,41 +117,11 @@ def blend_state() -> dict:
     }
 
 
-def image_rgba(image) -> np.ndarray:
-    width, height = image.size
-    pixels = np.empty(width * height * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    return pixels.reshape(height, width, 4)
+def inject_into_solver(monkeypatch, code: str) -> None:
+    """Run `code` in the solver process before its main: how the tests give it faults (it is a
+    process of its own, so patching this one changes nothing there)."""
+    from radiosity_addon.blender import worker
 
-
-def upstream(socket):
-    """Every node feeding `socket`, depth first."""
-    seen, stack = [], [link.from_node for link in socket.links]
-    while stack:
-        node = stack.pop()
-        if node not in seen:
-            seen.append(node)
-            stack += [link.from_node for socket in node.inputs for link in socket.links]
-    return seen
-
-
-def lightmap_wiring(material) -> dict | None:
-    """What the active Material Output shows: None unless it is the add-on's lightmap chain (an
-    Emission shader fed by the lightmap image on the Lightmap UV map, through arithmetic for a
-    "light" lightmap)."""
-    tree = material.node_tree
-    output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.is_active_output), None)
-    if output is None or not output.inputs["Surface"].is_linked:
-        return None
-    emission = output.inputs["Surface"].links[0].from_node
-    if emission.bl_idname != "ShaderNodeEmission" or not emission.inputs["Color"].is_linked:
-        return None
-    texture = next((n for n in upstream(emission.inputs["Color"]) if n.bl_idname == "ShaderNodeTexImage"
-                    and n.get("radiosity_baker")), None)
-    if texture is None or not texture.inputs["Vector"].is_linked:
-        return None
-    uv = texture.inputs["Vector"].links[0].from_node
-    if uv.bl_idname != "ShaderNodeUVMap":
-        return None
-    return {"image": texture.image.name if texture.image else None, "interpolation": texture.interpolation,
-            "uv_map": uv.uv_map}
+    main = "from radiosity_addon.solver_process.child import main"
+    assert main in worker.BOOTSTRAP
+    monkeypatch.setattr(worker, "BOOTSTRAP", worker.BOOTSTRAP.replace(main, f"exec({code!r}); {main}"))

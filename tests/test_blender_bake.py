@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import blender_support as support  # noqa: F401  (sets BLENDER_USER_RESOURCES before bpy loads)
 import bpy
 import numpy as np
@@ -140,16 +142,48 @@ def test_nan_vertices_are_refused_unchanged():
 
 
 def test_failure_after_the_solve_leaves_the_file_unchanged(monkeypatch):
-    """An error in the worker (here: the lightmap stage) rolls back the UV maps made for the bake."""
-    from radiosity_addon.blender import worker
-    from radiosity_addon.core import SolveError
-
-    def broken(*args, **kwargs):
-        raise SolveError("simulated lightmap failure")
-
-    monkeypatch.setattr(worker, "lightmap_images", broken)
+    """An error in the solver process (here: its lightmap stage) rolls back the UV maps made for the bake."""
+    support.inject_into_solver(monkeypatch, """
+import radiosity_addon.solver_process.child as child
+from radiosity_addon.core import SolveError
+def broken(*args, **kwargs):
+    raise SolveError("simulated lightmap failure")
+child.lightmap_images = broken
+""")
     support.open_blend(support.CORNELL)
     refused("simulated lightmap failure")
+
+
+def test_a_crash_of_the_solver_process_is_one_line_and_leaves_the_file_unchanged(monkeypatch):
+    """What a segfault in the OpenGL driver does: the process dies after its first progress report."""
+    support.inject_into_solver(monkeypatch, """
+import os, signal
+import radiosity_addon.core as core
+def crashing_solve(scene, settings, progress=None, **kwargs):
+    progress(0.1, "shot 1", {})
+    os.kill(os.getpid(), signal.SIGSEGV)
+core.solve = crashing_solve
+""")
+    support.open_blend(support.CORNELL)
+    refused("the solver process crashed (SIGSEGV)")
+
+
+def test_a_hung_solver_process_is_killed_with_one_line_and_the_file_unchanged(monkeypatch):
+    """A driver call that never returns holds Python's lock, so even the heartbeat stops."""
+    from radiosity_addon.blender import worker
+
+    monkeypatch.setattr(worker, "SILENCE_LIMIT", 3.0)
+    support.inject_into_solver(monkeypatch, """
+import ctypes
+import radiosity_addon.core as core
+def hanging_solve(*args, **kwargs):
+    ctypes.PyDLL(None).sleep(600)  # a C call that keeps the global interpreter lock
+core.solve = hanging_solve
+""")
+    support.open_blend(support.CORNELL)
+    started = time.monotonic()
+    refused("the solver stopped responding")
+    assert time.monotonic() - started < 30
 
 
 def test_exr_output_is_written_next_to_the_saved_file(tmp_path):
@@ -175,12 +209,13 @@ def test_exr_output_of_an_unsaved_file_is_refused_unchanged():
 
 
 def test_missing_opengl_is_one_line_and_leaves_the_file_unchanged(monkeypatch):
-    from radiosity_addon.core import GLUnavailable
-
-    def no_gl():
-        raise GLUnavailable("cannot create an OpenGL 4.3 context (simulated)")
-
-    monkeypatch.setattr("radiosity_addon.core.gpu.resources.create_context", no_gl)
+    support.inject_into_solver(monkeypatch, """
+import radiosity_addon.core.gpu.resources as resources
+from radiosity_addon.core import GLUnavailable
+def no_gl():
+    raise GLUnavailable("cannot create an OpenGL 4.3 context (simulated)")
+resources.create_context = no_gl
+""")
     support.open_blend(support.CORNELL)
     refused("OpenGL 4.3")
 

@@ -10,6 +10,9 @@ import zipfile
 
 import blender_support as support
 
+sys.path.insert(0, str(support.ROOT / "tools"))
+import build_extension  # noqa: E402
+
 INSTALL_AND_BAKE = r"""
 import sys, bpy
 zip_path, sample = sys.argv[1], sys.argv[2]
@@ -41,7 +44,10 @@ def test_extension_builds_validates_installs_and_bakes(tmp_path):
     names = zipfile.ZipFile(linux_zip).namelist()
     assert "blender_manifest.toml" in names and "__init__.py" in names
     assert any(n.startswith("shaders/") and n.endswith(".comp") for n in names)
-    assert sum(n.startswith("wheels/moderngl-") for n in names) == 2  # cp311 and cp313
+    for package in ("moderngl", "glcontext"):  # cp311, cp313 and cp314: Blender 4.2 to Debian's 5.2
+        assert sorted(n.split("-")[2] for n in names if n.startswith(f"wheels/{package}-")) == \
+            ["cp311", "cp313", "cp314"]
+    assert build_extension.check_zip(linux_zip) == []
     assert not any(n.startswith(("tests/", "sample_blends/", "tools/", "docs/", ".", "radiosity_addon/bench/"))
                    or "__pycache__" in n for n in names)  # only what users need ships
     assert any(n.startswith("shaders/include/") for n in names)
@@ -54,3 +60,24 @@ def test_extension_builds_validates_installs_and_bakes(tmp_path):
     assert installed.returncode == 0, installed.stdout[-3000:] + installed.stderr[-3000:]
     assert str(user) in installed.stdout.split("INSTALLED-FROM", 1)[1].splitlines()[0]
     assert "floor_lightmap" in installed.stdout.split("IMAGES", 1)[1]
+
+
+def test_a_zip_without_a_wheel_for_one_of_its_pythons_is_refused(tmp_path):
+    """make extension's check: each platform's zip holds each requirement for each Python."""
+    wheels = [f"wheels/{package}-{version}-{tag}-{tag}-win_amd64.whl"
+              for package, version in (("moderngl", "5.13.0"), ("glcontext", "3.1.0"))
+              for tag in ("cp311", "cp313", "cp314")]
+    def zip_with(held, listed):
+        archive = tmp_path / f"{len(held)}-{len(listed)}.zip"
+        with zipfile.ZipFile(archive, "w") as zipped:
+            generated = ", ".join(f'"./{w}"' for w in listed)
+            zipped.writestr("blender_manifest.toml", f'id = "x"\n[build.generated]\nplatforms = ["windows-x64"]\n'
+                                                     f"wheels = [{generated}]\n")
+            for wheel in held:
+                zipped.writestr(wheel, b"")
+        return build_extension.check_zip(archive)
+
+    assert zip_with(wheels, wheels) == []
+    assert zip_with(wheels[1:], wheels[1:]) == ["holds 0 moderngl wheel(s) for Python 3.11 on windows-x64"]
+    assert zip_with(wheels[:-1], wheels) == [f"lists ./{wheels[-1]} but does not hold it",
+                                             "holds 0 glcontext wheel(s) for Python 3.14 on windows-x64"]

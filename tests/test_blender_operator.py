@@ -1,9 +1,8 @@
-"""The operator's UI path and settings: Esc in the modal loop, per-object resolution, selection vs
-occluders, material read-out and its warnings."""
+"""The operator's settings: per-object resolution, selection vs occluders, material read-out and its
+warnings, the panel. (The modal path is in test_blender_ui_bake.py.)"""
 
 from __future__ import annotations
 
-import time
 from types import SimpleNamespace
 
 import blender_support as support
@@ -11,73 +10,8 @@ import bpy
 import numpy as np
 import pytest
 
-from radiosity_addon.blender import operators
 from radiosity_addon.blender.bake import prepare
 from radiosity_addon.blender.materials import MaterialReader
-
-
-class FakeWindowManager:
-    windows = ()
-
-    def __init__(self):
-        self.progress = []
-
-    def progress_update(self, value):
-        self.progress.append(value)
-
-    def progress_end(self):
-        pass
-
-    def event_timer_remove(self, timer):
-        pass
-
-
-def solve_until_cancelled(scene, settings, progress=None, should_cancel=None, gpu=None):
-    """A solve that reports progress and then runs until it is cancelled: Esc always arrives in time."""
-    from radiosity_addon.core import SolveCancelled
-
-    progress(0.25, "waiting for Esc", {})
-    deadline = time.monotonic() + 60
-    while not should_cancel():
-        assert time.monotonic() < deadline, "Esc never reached the solve"
-        time.sleep(0.01)
-    raise SolveCancelled("cancelled")
-
-
-def test_escape_in_the_modal_loop_cancels_and_leaves_the_file_unchanged(monkeypatch):
-    """Drive RADIOSITY_OT_bake.modal as Blender's event loop would: timer ticks, then Esc."""
-    monkeypatch.setattr("radiosity_addon.core.solve", solve_until_cancelled)
-    context = support.open_blend(support.CORNELL, method="progressive", subdivision=4)
-    before = support.blend_state()
-    plan = prepare(context, context.scene.radiosity.bake_options(context.selected_objects))
-    assert support.blend_state() != before  # prepare made the Lightmap UV maps
-    operators.running = plan
-    plan.worker.start()
-    reports = []
-    fake_operator = SimpleNamespace(_timer=None, report=lambda kind, text: reports.append((kind, text)))
-    fake_operator._end = lambda ctx, p: operators.RADIOSITY_OT_bake._end(fake_operator, ctx, p)
-    status = []
-    fake_context = SimpleNamespace(window_manager=FakeWindowManager(),
-                                   workspace=SimpleNamespace(status_text_set=status.append))
-    tick = SimpleNamespace(type="TIMER", value="NOTHING")
-    escape = SimpleNamespace(type="ESC", value="PRESS")
-    try:
-        while not plan.worker.snapshot().fraction > 0:
-            assert operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, tick) == {"RUNNING_MODAL"}
-            time.sleep(0.05)
-        assert operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, tick) == {"RUNNING_MODAL"}
-        assert any("Esc cancels" in (line or "") for line in status)
-        result = operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, escape)
-        deadline = time.monotonic() + 60
-        while result == {"RUNNING_MODAL"} and time.monotonic() < deadline:
-            time.sleep(0.05)
-            result = operators.RADIOSITY_OT_bake.modal(fake_operator, fake_context, tick)
-    finally:
-        operators.running = None
-    assert result == {"CANCELLED"}
-    assert reports and reports[-1][0] == {"WARNING"} and "cancelled" in reports[-1][1]
-    assert status[-1] is None  # the status bar is given back
-    assert support.blend_state() == before
 
 
 def test_object_resolution_override_sets_the_lightmap_size():

@@ -2,12 +2,13 @@
 
     python tools/build_extension.py [--output-dir dist]
 
-Wheels (moderngl + glcontext for CPython 3.11 = Blender 4.2-5.0 and 3.13 = Blender
-5.1+) are downloaded into wheels/ by pip (gitignored, never committed); numpy ships
-with Blender and is not bundled. The manifest's `wheels` list must name exactly what
-was downloaded, so a version bump that forgets the manifest fails here, not in
-Blender. Blender's own tool (`blender_ext.py`, carried by the bpy wheel) builds and
-validates.
+Wheels (moderngl + glcontext for CPython 3.11 = Blender 4.2-5.0, 3.13 = Blender 5.1+ and
+Debian's 4.3, 3.14 = Debian's 5.2) are downloaded into wheels/ by pip (gitignored, never
+committed); numpy ships with Blender and is not bundled. The manifest's `wheels` list must
+name exactly what was downloaded, so a version bump that forgets the manifest fails here,
+not in Blender; and every zip must hold one wheel of each requirement for each Python on its
+platform, since Blender refuses to enable an extension without wheels for its own Python.
+Blender's own tool (`blender_ext.py`, carried by the bpy wheel) builds and validates.
 """
 
 from __future__ import annotations
@@ -17,12 +18,13 @@ import importlib.util
 import subprocess
 import sys
 import tomllib
+import zipfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 WHEELS_DIR = ROOT / "wheels"
 REQUIREMENTS = ("moderngl==5.13.0", "glcontext==3.1.0")
-PYTHON_VERSIONS = ("3.11", "3.13")
+PYTHON_VERSIONS = ("3.11", "3.13", "3.14")
 # Blender platform -> pip platform tags (pip picks the best wheel among them)
 PLATFORM_TAGS = {
     "linux-x64": ["manylinux_2_28_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64",
@@ -79,6 +81,36 @@ def check_manifest(downloaded: set[str]) -> dict:
     return manifest
 
 
+def wheel_tags(file_name: str) -> tuple[str, str, set[str]]:
+    """(distribution, python tag, platform tags) of a wheel's file name (name-ver-py-abi-plat.whl)."""
+    parts = file_name[:-len(".whl")].split("-")
+    return parts[0].lower(), parts[-3], set(parts[-1].split("."))
+
+
+def check_zip(archive: Path) -> list[str]:
+    """The faults of one platform's zip: a requirement missing for one of PYTHON_VERSIONS, or a
+    wheel the zip's manifest lists but does not hold."""
+    with zipfile.ZipFile(archive) as zipped:
+        names = zipped.namelist()
+        manifest = tomllib.loads(zipped.read("blender_manifest.toml").decode())
+    # a platform's zip says what it holds in [build.generated], which Blender reads over the top level
+    manifest.update(manifest.get("build", {}).get("generated", {}))
+    held = {name for name in names if name.startswith("wheels/") and name.endswith(".whl")}
+    faults = [f"lists {wheel} but does not hold it" for wheel in manifest.get("wheels", [])
+              if wheel.removeprefix("./") not in held]
+    tags = [wheel_tags(name.split("/")[-1]) for name in held]
+    for platform in manifest.get("platforms", []):
+        accepted = set(PLATFORM_TAGS.get(platform, ()))
+        for distribution in (requirement.split("==")[0] for requirement in REQUIREMENTS):
+            for python in PYTHON_VERSIONS:
+                python_tag = "cp" + python.replace(".", "")
+                count = sum(1 for name, wheel_python, platforms in tags
+                            if name == distribution and wheel_python == python_tag and platforms & accepted)
+                if count != 1:
+                    faults.append(f"holds {count} {distribution} wheel(s) for Python {python} on {platform}")
+    return faults
+
+
 def run(script: Path, *args: str) -> str:
     result = subprocess.run([sys.executable, str(script), *args], capture_output=True, text=True, cwd=ROOT)
     if result.returncode != 0:
@@ -105,6 +137,9 @@ def main(argv=None) -> int:
                  f" {', '.join(z.name for z in zips) or 'none'}")
     for archive in zips:
         run(script, "validate", str(archive))
+        faults = check_zip(archive)
+        if faults:
+            sys.exit(f"error: {archive.name} {'; '.join(faults)}")
         print(f"built and validated {archive.relative_to(ROOT) if archive.is_relative_to(ROOT) else archive}"
               f" ({archive.stat().st_size // 1024} KiB)")
     return 0

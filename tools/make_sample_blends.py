@@ -1,7 +1,10 @@
 """Write sample_blends/cornell_box.blend and sample_blends/room.blend.
 
 Run with the bpy module (`.venv/bin/python tools/make_sample_blends.py`) or with
-Blender (`blender -b --python tools/make_sample_blends.py`).
+Blender (`blender -b --factory-startup --python tools/make_sample_blends.py`): the files are in
+the format of the Blender that made them, so each Blender can open the ones it made (a file saved
+by Blender 5.x does not open in 4.x). `--output-dir DIR` (after `--` under Blender) writes them
+elsewhere than sample_blends/.
 
 cornell_box.blend: the bundled Cornell box (radiosity_addon/core/scene/scenes/cornell-box.json),
 turned from its y-up data to Blender's z-up, one object per named part, Principled
@@ -15,6 +18,7 @@ emissive ceiling panel, a camera. Neither file has 'Lightmap' UV maps: the add-o
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import sys
@@ -113,7 +117,13 @@ def make_room() -> Path:
     return save("room.blend")
 
 
-def main() -> int:
+def main(argv=None) -> int:
+    global OUT_DIR
+    if argv is None:  # Blender passes its own arguments; ours come after "--"
+        argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+    parser = argparse.ArgumentParser(description="write the sample .blend files")
+    parser.add_argument("--output-dir", type=Path, default=OUT_DIR)
+    OUT_DIR = parser.parse_args(argv).output_dir.resolve()
     make_cornell_box()
     make_room()
     return 0

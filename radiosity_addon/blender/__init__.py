@@ -1,8 +1,9 @@
 """The Blender side of Radiosity Baker: the only package that imports bpy.
 
 properties (scene.radiosity, object.radiosity) -> panel (Render Properties ›
-Radiosity Bake) -> operators (bake, remove bake) -> bake (transaction) ->
-export / worker (solve on its own thread) / apply (images, material wiring).
+Radiosity Bake) -> operators (bake, remove bake) -> ui_bake (the modal bake's life and every way
+it ends) -> bake (transaction) -> export / worker (the solve in a child process, see
+radiosity_addon/solver_process) / live_preview / apply (images, material wiring).
 """
 
 from . import operators, panel, properties

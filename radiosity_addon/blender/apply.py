@@ -239,8 +239,9 @@ def unwire_material(material) -> None:
         del material[ENABLED_NODES]
 
 
-def remove_bake(obj) -> bool:
-    """Restore the object's original shading, delete its lightmap image and the UV map the bake made.
+def remove_bake(obj, shading_only: bool = False) -> bool:
+    """Restore the object's original shading, delete its lightmap image and the UV map the bake made
+    (`shading_only`: keep those two; a cancelled bake takes back its live preview so).
     Returns False if the object had no bake."""
     had_bake = False
     for slot in obj.material_slots:
@@ -267,6 +268,8 @@ def remove_bake(obj) -> bool:
         for key in (ORIGINAL_SLOTS, ADDED_SLOT):
             if key in obj:
                 del obj[key]
+    if shading_only:
+        return had_bake
     image = bpy.data.images.get(lightmap_image_name(obj.name))
     if image is not None:
         had_bake = True

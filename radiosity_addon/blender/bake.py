@@ -1,8 +1,8 @@
-"""The bake as a transaction: prepare (main thread) -> solve (worker) -> finish or roll back.
+"""The bake as a transaction: prepare (main thread) -> solve (a child process) -> finish or roll back.
 
-`prepare` may add 'Lightmap' UV maps; `rollback` removes them, so a cancelled or
-failed bake leaves the .blend exactly as it was. `finish` writes the images and
-switches the shading only once the solve has succeeded.
+`prepare` may add 'Lightmap' UV maps and a progressive bake in the UI shows a live preview;
+`rollback` takes both back, so a cancelled or failed bake leaves the .blend exactly as it was.
+`finish` writes the images and switches the shading only once the solve has succeeded.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from .export import check_emitters, export_scene
 from .lightmap_uv import add_lightmap_uvs, remove_lightmap_uvs
 from .material_bake import bake_material_maps, principled_diffuse_factors
 from .lights import render_lamps
+from .live_preview import LivePreview
 from .options import BakeOptions
 from .worker import BakeWorker
 
@@ -43,6 +44,7 @@ class BakePlan:
     content: str = "light"  # what the lightmaps hold, and so how the materials show them
     diffuse_factors: dict = field(default_factory=dict)  # material -> Principled node -> RGB (light content)
     instances: int = 0  # instanced geometries that took part without a lightmap
+    preview: LivePreview | None = None  # made by the first snapshot of a progressive bake in the UI
 
 
 def choose_objects(context, objects=None) -> list:
@@ -59,8 +61,9 @@ def choose_objects(context, objects=None) -> list:
     return meshes
 
 
-def prepare(context, options: BakeOptions, objects=None, output_dir=None) -> BakePlan:
-    """Check, export and hand the solve to a worker (not yet started)."""
+def prepare(context, options: BakeOptions, objects=None, output_dir=None, preview_interval=None) -> BakePlan:
+    """Check, export and hand the solve to a worker (not yet started). `preview_interval`: seconds
+    between live previews of a progressive solve (None: none)."""
     baked = choose_objects(context, objects)
     try:
         options.solve.validate()
@@ -80,7 +83,7 @@ def prepare(context, options: BakeOptions, objects=None, output_dir=None) -> Bak
     except BaseException:
         remove_lightmap_uvs(added)
         raise
-    worker = BakeWorker(scene, options.solve, exported.baked_objects, options.lightmaps)
+    worker = BakeWorker(scene, options.solve, exported.baked_objects, options.lightmaps, preview_interval)
     warnings = list(exported.warnings)
     if exported.instances:
         warnings.append(f"{exported.instances} instance(s) block and reflect light but get no lightmap"
@@ -104,7 +107,30 @@ def baked_materials(context, exported, baked, options: BakeOptions):
     return scene, factors
 
 
+def start(plan: BakePlan) -> None:
+    try:
+        plan.worker.start()
+    except OSError as error:  # no Python to run, no temporary folder
+        rollback(plan)
+        raise BakeError(f"cannot start the solver process ({error.strerror or error})") from None
+
+
+def show_preview(plan: BakePlan) -> bool:
+    """Show the newest snapshot of the solve, if one came since the last call (then True)."""
+    snapshot = plan.worker.take_preview()
+    if snapshot is None:
+        return False
+    plan.preview = plan.preview or LivePreview(plan.objects, plan.content, plan.diffuse_factors)
+    plan.preview.show(snapshot)
+    return True
+
+
 def rollback(plan: BakePlan) -> None:
+    """Leave the file as it was before `prepare`, and end the solver process."""
+    plan.worker.discard()
+    if plan.preview is not None:
+        plan.preview.take_back()
+        plan.preview = None
     remove_lightmap_uvs(plan.added_uv_meshes)
 
 
@@ -119,10 +145,10 @@ def finish(plan: BakePlan) -> str:
         if isinstance(error, USER_ERRORS):
             raise BakeError(str(error)) from None
         raise error if error is not None else BakeError("the bake stopped without a result")
-    images, report = worker.result
-    plan.report = report.to_dict()
+    result = worker.result
+    plan.report = result.report
     try:
-        written = apply.write_images(images, plan.output, plan.directory)
+        written = apply.write_images(result.images, plan.output, plan.directory)
     except BaseException:
         rollback(plan)
         raise
@@ -133,10 +159,13 @@ def finish(plan: BakePlan) -> str:
             apply.remove_bake(obj)
         rollback(plan)
         raise
+    if plan.preview is not None:
+        plan.preview.release()
+    worker.discard()
     seconds = time.monotonic() - plan.started
-    plan.scene.radiosity.last_bake = report.summary_line()
-    return (f"baked {len(plan.objects)} object(s) in {seconds:.1f} s ({report.method},"
-            f" {report.counts.patches} patches)")
+    plan.scene.radiosity.last_bake = result.summary
+    return (f"baked {len(plan.objects)} object(s) in {seconds:.1f} s ({result.report['method']},"
+            f" {result.report['counts']['patches']} patches)")
 
 
 def bake_blocking(context, options: BakeOptions, objects=None, output_dir=None, should_cancel=None,
@@ -144,16 +173,14 @@ def bake_blocking(context, options: BakeOptions, objects=None, output_dir=None, 
     """Scripts, background mode and the command line: the whole bake, waiting for the worker.
     Returns the finished plan: its summary line, warnings and the solve's report."""
     plan = prepare(context, options, objects, output_dir)
-    plan.worker.start()
+    start(plan)
     try:
         while not plan.worker.wait(0.1):
             if should_cancel is not None and should_cancel():
                 plan.worker.cancel()
             if on_progress is not None:
-                on_progress(plan.worker.snapshot())
-    except BaseException:  # Ctrl+C: stop the worker, then leave the file as it was
-        plan.worker.cancel()
-        plan.worker.wait()
+                on_progress(plan.worker.clock)
+    except BaseException:  # Ctrl+C: end the solver, then leave the file as it was
         rollback(plan)
         raise
     plan.summary = finish(plan)

@@ -71,7 +71,8 @@ def render_preview(path: Path, size: int = 256, samples: int = 8) -> None:
 
 def bake_file(request: HeadlessBake, progress=None):
     """Bake the file; returns (summary line, the solve's report dict). User errors raise BakeError
-    (one line). The settings stored in the file (`scene.radiosity`) are read, never changed."""
+    (one line). The settings stored in the file (`scene.radiosity`) are read, never changed.
+    progress(BakeClock), if given, is called ten times a second while the solver runs."""
     path = Path(request.file)
     if not path.is_file():
         raise BakeError(f"file '{request.file}' does not exist")

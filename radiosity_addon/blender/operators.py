@@ -7,11 +7,9 @@ import traceback
 import bpy
 
 from ..core import SolveCancelled
-from . import apply
-from .bake import USER_ERRORS, BakePlan, bake_blocking, choose_objects, finish, prepare
-
-# The one bake running in the UI (the panel draws its progress); None when idle.
-running: BakePlan | None = None
+from . import apply, ui_bake
+from .bake import USER_ERRORS, bake_blocking, choose_objects, prepare
+from .errors import BakeError
 
 # events that may reach the UI during a modal bake (looking around is fine, editing is not)
 NAVIGATION_EVENTS = {"MIDDLEMOUSE", "WHEELUPMOUSE", "WHEELDOWNMOUSE", "MOUSEMOVE", "INBETWEEN_MOUSEMOVE",
@@ -35,11 +33,17 @@ def _report_failure(operator, error: BaseException) -> set:
     return {"CANCELLED"}
 
 
-def _redraw_properties(context) -> None:
-    for window in context.window_manager.windows:
-        for area in window.screen.areas:
-            if area.type in {"PROPERTIES", "STATUSBAR"}:
-                area.tag_redraw()
+def refusal(context) -> str | None:
+    """Why the Bake button is disabled right now (the tooltip and the panel say it), or None."""
+    if ui_bake.running is not None:
+        return ui_bake.BUSY
+    if context.scene is None:
+        return "no scene to bake"
+    try:
+        choose_objects(context)
+    except BakeError as error:
+        return str(error)
+    return None
 
 
 class RADIOSITY_OT_bake(bpy.types.Operator):
@@ -47,14 +51,16 @@ class RADIOSITY_OT_bake(bpy.types.Operator):
 
     bl_idname = "radiosity.bake"
     bl_label = "Bake Radiosity"
-    bl_options = {"REGISTER"}
+    # one undo step for the whole bake (pushed when it finishes, none when cancelled); not REGISTER:
+    # Repeat Last or Adjust Last Operation would re-run a whole bake as a blocking script call
+    bl_options = {"UNDO"}
 
     @classmethod
     def poll(cls, context):
-        if running is not None:
-            cls.poll_message_set("a radiosity bake is already running")
-            return False
-        return context.scene is not None
+        reason = refusal(context)
+        if reason is not None:
+            cls.poll_message_set(reason)
+        return reason is None
 
     def execute(self, context):
         try:
@@ -68,55 +74,41 @@ class RADIOSITY_OT_bake(bpy.types.Operator):
         return {"FINISHED"}
 
     def invoke(self, context, event):
-        global running
         if bpy.app.background or context.window is None:
             return self.execute(context)
         try:
             objects = choose_objects(context)
-            plan = prepare(context, context.scene.radiosity.bake_options(objects), objects)
+            plan = prepare(context, context.scene.radiosity.bake_options(objects), objects,
+                           preview_interval=ui_bake.PREVIEW_INTERVAL)
+            self._bake = ui_bake.begin(context, plan)
         except Exception as error:
             return _report_failure(self, error)
         for line in plan.warnings:
             self.report({"WARNING"}, line)
-        running = plan
-        plan.worker.start()
-        window_manager = context.window_manager
-        self._timer = window_manager.event_timer_add(0.2, window=context.window)
-        window_manager.progress_begin(0.0, 1.0)
-        window_manager.modal_handler_add(self)
+        context.window_manager.modal_handler_add(self)
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        plan = running
-        if plan is None:
+        bake = self._bake
+        if ui_bake.running is not bake:  # interrupted from outside (a file loaded, the add-on disabled)
             return {"CANCELLED"}
         if event.type == "ESC" and event.value == "PRESS":
-            plan.worker.cancel()
+            bake.plan.worker.cancel()
         if event.type == "TIMER":
-            progress = plan.worker.snapshot()
-            context.window_manager.progress_update(progress.fraction)
-            status = "Radiosity bake: cancelling..." if plan.worker.cancelled else progress.status_line()
-            context.workspace.status_text_set(status)
-            _redraw_properties(context)
-            if plan.worker.done:
-                return self._end(context, plan)
-            return {"RUNNING_MODAL"}
+            if not ui_bake.advance(bake):
+                return {"RUNNING_MODAL"}
+            try:
+                summary = ui_bake.end(bake)
+            except Exception as error:
+                return _report_failure(self, error)
+            self.report({"INFO"}, f"Radiosity bake: {summary}")
+            return {"FINISHED"}
         return {"PASS_THROUGH"} if event.type in NAVIGATION_EVENTS else {"RUNNING_MODAL"}
 
-    def _end(self, context, plan):
-        global running
-        window_manager = context.window_manager
-        window_manager.event_timer_remove(self._timer)
-        window_manager.progress_end()
-        context.workspace.status_text_set(None)
-        running = None
-        _redraw_properties(context)
-        try:
-            summary = finish(plan)
-        except Exception as error:
-            return _report_failure(self, error)
-        self.report({"INFO"}, f"Radiosity bake: {summary}")
-        return {"FINISHED"}
+    def cancel(self, context):
+        """Blender drops the modal handler (a file is loaded, the window closes, Blender quits)."""
+        if ui_bake.running is getattr(self, "_bake", None):
+            ui_bake.interrupt("Blender ended the bake's operator")
 
 
 class RADIOSITY_OT_remove_bake(bpy.types.Operator):
@@ -129,7 +121,10 @@ class RADIOSITY_OT_remove_bake(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return running is None
+        if ui_bake.running is not None:
+            cls.poll_message_set(ui_bake.BUSY)
+            return False
+        return True
 
     def execute(self, context):
         objects = [obj for obj in context.selected_objects if obj.type == "MESH"] \
@@ -151,10 +146,7 @@ def register():
 
 
 def unregister():
-    global running
-    if running is not None:
-        running.worker.cancel()
-        running = None
+    ui_bake.unregister()
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)
 

@@ -2,9 +2,52 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import bpy
 
-from . import operators
+from . import operators, ui_bake
+
+# Blender draws labels on one line and cuts them: long lines are wrapped here, at a width from the
+# region's, with a conservative glyph width (the real-Blender tests measure the lines with blf)
+GLYPH_WIDTH = 6.5  # pixels per character of the UI font at scale 1 (its average is about 5.7)
+LABEL_MARGIN = 50.0  # pixels of the region's width a label cannot use (panel padding, icon)
+SEPARATOR = " · "
+
+
+def fitted(text: str, region_width: float, ui_scale: float = 1.0) -> list[str]:
+    """`text` as lines that fit a label in a region this wide: broken at ' · ' where it can be."""
+    chars = max(12, int((region_width - LABEL_MARGIN * ui_scale) / (GLYPH_WIDTH * ui_scale)))
+    lines: list[str] = []
+    for piece in text.split(SEPARATOR):
+        if lines and len(lines[-1]) + len(SEPARATOR) + len(piece) <= chars:
+            lines[-1] += SEPARATOR + piece
+        else:
+            lines.extend(textwrap.wrap(piece, chars) or [""])
+    return lines
+
+
+def sentence(text: str) -> str:
+    return text[:1].upper() + text[1:]
+
+
+def draw_lines(layout, context, text: str, icon: str) -> None:
+    region = context.region
+    width = region.width if region is not None else 300
+    column = layout.column(align=True)
+    for number, line in enumerate(fitted(text, width, context.preferences.system.ui_scale)):
+        column.label(text=line, icon=icon if number == 0 else "BLANK1")
+
+
+def draw_progress(layout, bake) -> None:
+    worker = bake.plan.worker
+    clock = worker.clock
+    if worker.cancelled:
+        layout.progress(factor=clock.fraction(), text="Cancelling...")
+        return
+    layout.progress(factor=clock.fraction(), text=clock.bar_text())
+    layout.label(text=sentence(clock.stage), icon="TIME")
+    layout.label(text="Esc cancels", icon="CANCEL")
 
 
 class RENDER_PT_radiosity_bake(bpy.types.Panel):
@@ -20,18 +63,19 @@ class RENDER_PT_radiosity_bake(bpy.types.Panel):
         layout.use_property_decorate = False
         settings = context.scene.radiosity
 
-        plan = operators.running
-        if plan is not None:
-            progress = plan.worker.snapshot()
-            layout.progress(factor=progress.fraction, text=f"{100 * progress.fraction:.0f}% {progress.message}")
-            layout.label(text="Esc cancels", icon="CANCEL")
+        bake = ui_bake.running
+        if bake is not None:
+            draw_progress(layout, bake)
         else:
             row = layout.row()
             row.scale_y = 1.5
             row.operator("radiosity.bake", text="Bake", icon="RENDER_STILL")
+            reason = operators.refusal(context)
+            if reason is not None:  # the button is greyed out; say why without a tooltip
+                draw_lines(layout, context, sentence(reason), "INFO")
 
         column = layout.column()
-        column.enabled = plan is None
+        column.enabled = bake is None
         column.prop(settings, "quality")
         column.prop(settings, "method")
         if settings.quality == "CUSTOM":  # the presets set these knobs themselves
@@ -57,7 +101,7 @@ class RENDER_PT_radiosity_bake(bpy.types.Panel):
 
         layout.operator("radiosity.remove_bake", icon="LOOP_BACK")
         if settings.last_bake:  # what the scene analysis let the last bake skip
-            layout.label(text=settings.last_bake, icon="INFO")
+            draw_lines(layout, context, settings.last_bake, "INFO")
 
 
 CLASSES = (RENDER_PT_radiosity_bake,)

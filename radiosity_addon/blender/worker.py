@@ -1,107 +1,196 @@
-"""The bake's background half: solve and lay out lightmaps on ONE worker thread.
+"""The bake's background half: the solve in a process of its own (`solver_process`), watched here.
 
-bpy-free on purpose. Inside Blender's UI the main thread owns Blender's OpenGL
-context, so our moderngl context is created, used and released on the worker
-thread alone; the main thread only reads the progress snapshot and the result.
-Scripts and background runs use the same thread and simply wait for it, so
-both paths run the same code.
+bpy-free. A solve on a thread of Blender's process froze the UI (the thread holds Python's global
+lock for seconds) and a crash of the OpenGL driver would have taken Blender with it. So the child
+runs in Blender's own Python, started with the extension's path and Blender's `sys.path` (numpy,
+and moderngl from the extension's wheels). A reader thread, idle on the pipe, turns the child's
+messages into state; the main thread only polls it (the modal timer, or a script's wait loop),
+so it never waits on the child. The images come back as files in a temporary folder.
 """
 
 from __future__ import annotations
 
+import json
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from pathlib import Path
 
-from .. import core
-from ..core import GPU, LightmapSettings, Scene, SolveCancelled, SolveError, SolveSettings
+from ..core import LightmapSettings, Scene, SolveCancelled, SolveSettings
+from ..solver_process import protocol
+from .errors import BakeError
+from .progress import BakeClock
+
+SILENCE_LIMIT = 60.0  # seconds without a word from the child, heartbeats included: it hangs
+NICENESS = 10  # the child's priority below Blender's, so the UI gets the CPU first
+# run by `python -I -c`: lower its priority before anything else (its imports are work too), the
+# parent's path, then the child's main (argv: sys.path as JSON, the job folder)
+BOOTSTRAP = (f"import os, sys, json; hasattr(os, 'nice') and os.nice({NICENESS}); "
+             "sys.path[:0] = json.loads(sys.argv[1]); "
+             "from radiosity_addon.solver_process.child import main; sys.exit(main(sys.argv[2]))")
+# Windows: no console window, and a priority below Blender's (it has no os.nice)
+WINDOWS_FLAGS = getattr(subprocess, "CREATE_NO_WINDOW", 0) | getattr(subprocess, "BELOW_NORMAL_PRIORITY_CLASS", 0)
+
+
+def extension_root() -> Path:
+    """The folder holding the `radiosity_addon` package (the extension's, or the source tree)."""
+    return Path(__file__).resolve().parents[2]
+
+
+def child_command(directory: Path) -> list[str]:
+    """Blender's Python (sys.executable in Blender 2.91+; the bpy module's interpreter otherwise),
+    isolated from the user's PYTHON* variables, with this process's import path."""
+    path = [str(extension_root())] + [str(Path(p).resolve()) for p in sys.path if p]
+    return [sys.executable, "-I", "-c", BOOTSTRAP, json.dumps(path), str(directory)]
 
 
 @dataclass
-class Progress:
-    fraction: float = 0.0
-    message: str = "starting"
-    started: float = field(default_factory=time.monotonic)
-
-    @property
-    def seconds_left(self) -> float | None:
-        """A linear estimate; None until there is enough progress to extrapolate."""
-        elapsed = time.monotonic() - self.started
-        if self.fraction < 0.02 or elapsed < 1.0:
-            return None
-        return elapsed * (1.0 - self.fraction) / self.fraction
-
-    def status_line(self) -> str:
-        left = self.seconds_left
-        eta = f", about {left:.0f} s left" if left is not None else ""
-        return f"Radiosity bake {100 * self.fraction:.0f}%: {self.message}{eta} (Esc cancels)"
+class SolveResult:
+    images: dict  # object name -> float32 (H, W, 4) linear RGBA, alpha = coverage
+    report: dict  # the solve's report (Report.to_dict())
+    summary: str  # Report.summary_line(): what the bake simulated and skipped
 
 
-def lightmap_images(scene: Scene, solution, objects: list[str], settings: LightmapSettings, gpu: GPU) -> dict:
-    """object name -> float32 (H, W, 4) linear RGBA, alpha = coverage, for `objects` only."""
-    lightmaps = core.bake_lightmaps(scene, solution, settings, gpu=gpu, objects=list(objects))  # occluders get none
-    images = {}
-    for name in objects:
-        if name not in lightmaps:
-            raise SolveError(f"object '{name}': no lightmap was produced")
-        images[name] = lightmaps[name].filled_image()
-    return images
+def ended_badly(code: int) -> str:
+    if code < 0:
+        try:
+            name = signal.Signals(-code).name
+        except ValueError:
+            name = f"signal {-code}"
+        return f"the solver process crashed ({name}), perhaps in the OpenGL driver; nothing was changed"
+    return f"the solver process ended unexpectedly (exit status {code}); nothing was changed, details on the console"
 
 
 class BakeWorker:
-    """Runs solve + lightmaps on its own thread. Poll `progress`, `done`; read `result` or `error`."""
+    """One solve in a child process. start(); then poll() (or wait()) until it returns True, and
+    read `result` or `error`; take_preview() gives the newest images of a progressive solve so far;
+    cancel() ends it at once (it writes only into its own folder, so nothing can be half written);
+    discard() ends it and removes its files, whatever state it is in."""
 
-    def __init__(self, scene: Scene, settings: SolveSettings, objects: list[str], lightmaps: LightmapSettings):
+    def __init__(self, scene: Scene, settings: SolveSettings, objects: list[str], lightmaps: LightmapSettings,
+                 preview_interval: float | None = None):
         self.scene, self.settings, self.objects, self.lightmaps = scene, settings, objects, lightmaps
-        self.progress = Progress()
-        self.result: tuple[dict, core.Report] | None = None  # (images, solve report)
+        self.preview_interval = preview_interval  # seconds between previews; None: none (scripts)
+        self.clock = BakeClock()
+        self.result: SolveResult | None = None
         self.error: BaseException | None = None
-        self._cancel = threading.Event()
+        self.cancelled = False
+        self.directory: Path | None = None
+        self._process: subprocess.Popen | None = None
+        self._reader: threading.Thread | None = None
         self._lock = threading.Lock()
-        self._thread = threading.Thread(target=self._run, name="radiosity-bake", daemon=True)
+        self._messages: list[dict] = []  # read, not yet handled by the main thread
+        self._last_heard = 0.0
+        self._preview: str | None = None
+        self._over = False
 
     def start(self) -> "BakeWorker":
-        self._thread.start()
+        self.directory = Path(tempfile.mkdtemp(prefix="radiosity-bake-"))
+        protocol.write_job(self.directory, self.scene, self.settings, self.lightmaps, self.objects,
+                           self.preview_interval)
+        self._process = subprocess.Popen(child_command(self.directory), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                         text=True, encoding="utf-8",
+                                         creationflags=WINDOWS_FLAGS)
+        self._last_heard = time.monotonic()
+        self._reader = threading.Thread(target=self._read, name="radiosity-bake-pipe", daemon=True)
+        self._reader.start()
         return self
 
+    def _read(self) -> None:
+        for line in self._process.stdout:
+            message = protocol.decode(line)
+            if message is not None:
+                with self._lock:
+                    self._last_heard = time.monotonic()
+                    self._messages.append(message)
+
     def cancel(self) -> None:
-        self._cancel.set()
+        if not self.cancelled and not self._over:
+            self.cancelled = True
+            self._process.kill()
 
-    @property
-    def cancelled(self) -> bool:
-        return self._cancel.is_set()
+    def poll(self) -> bool:
+        """Handle what the child said; kill it if it hangs. True once it is over."""
+        if self._over:
+            return True
+        with self._lock:
+            messages, self._messages = self._messages, []
+            silent = time.monotonic() - self._last_heard
+        for message in messages:
+            self._handle(message)
+        if self._process.poll() is None:
+            if silent > SILENCE_LIMIT and self.error is None:
+                self.error = BakeError(f"the solver stopped responding for {silent:.0f} s (a hung OpenGL driver?);"
+                                       f" nothing was changed")
+                self._process.kill()
+            return False
+        self._reader.join(5.0)  # its last messages
+        with self._lock:
+            messages, self._messages = self._messages, []
+        for message in messages:
+            self._handle(message)
+        self._end(self._process.returncode)
+        return True
 
-    @property
-    def done(self) -> bool:
-        return not self._thread.is_alive()
+    def _handle(self, message: dict) -> None:
+        kind = message["kind"]
+        if kind == "progress":
+            self.clock.solving(message["fraction"], message["message"], message.get("eta"))
+        elif kind == "stage":
+            self.clock.laying_out_lightmaps()
+        elif kind == "preview":
+            if self._preview is not None:  # superseded before it was shown
+                (self.directory / self._preview).unlink(missing_ok=True)
+            self._preview = message["file"]
+        elif kind == "result":
+            self.result = SolveResult(protocol.load_images(self.directory / message["file"]), message["report"],
+                                      message["summary"])
+            self.clock.finished()
+        elif kind == "error" and self.error is None:
+            self.error = BakeError(message["message"] if message["user"] else
+                                   f"the solver failed unexpectedly ({message['message']}); nothing was changed,"
+                                   f" details on the console")
+
+    def _end(self, code: int) -> None:
+        self._over = True
+        if self.cancelled and self.result is None:
+            self.error = SolveCancelled("cancelled")
+        elif self.result is None and self.error is None:
+            self.error = BakeError(ended_badly(code))
+
+    def take_preview(self) -> dict | None:
+        """The newest preview images not taken yet (object name -> RGBA), or None."""
+        name, self._preview = self._preview, None
+        if name is None or self.directory is None:
+            return None
+        path = self.directory / name
+        images = protocol.load_images(path)
+        path.unlink(missing_ok=True)
+        return images
 
     def wait(self, timeout: float | None = None) -> bool:
-        self._thread.join(timeout)
-        return self.done
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while not self.poll():
+            if deadline is not None and time.monotonic() >= deadline:
+                return False
+            time.sleep(0.02)
+        return True
 
-    def snapshot(self) -> Progress:
-        with self._lock:
-            return Progress(self.progress.fraction, self.progress.message, self.progress.started)
-
-    def _report(self, fraction, message, details=None):
-        with self._lock:
-            self.progress.fraction = float(min(max(fraction, 0.0), 1.0))
-            self.progress.message = message
-
-    def _run(self) -> None:
-        try:
-            with core.open_gpu() as gpu:
-                # the solve takes 95 % of the bar, the lightmap layout the rest
-                solution = core.solve(self.scene, self.settings,
-                                      progress=lambda f, m, d=None: self._report(0.95 * f, m, d),
-                                      should_cancel=self._cancel.is_set, gpu=gpu)
-                if self._cancel.is_set():
-                    raise SolveCancelled("cancelled")
-                self._report(0.95, "writing lightmaps")
-                images = lightmap_images(self.scene, solution, self.objects, self.lightmaps, gpu)
-            if self._cancel.is_set():
-                raise SolveCancelled("cancelled")
-            self._report(1.0, "done")
-            self.result = (images, solution.report)
-        except BaseException as error:  # handed to the main thread, which reports it
-            self.error = error
+    def discard(self) -> None:
+        """End the child (if it still runs) and remove its files; the result is dropped."""
+        if self._process is not None:
+            if self._process.poll() is None:
+                self._process.kill()
+            try:
+                self._process.stdin.close()
+                self._process.wait(5.0)  # Windows removes no file of a running process
+            except (OSError, subprocess.TimeoutExpired):
+                pass
+        self._over = True
+        if self.directory is not None:
+            shutil.rmtree(self.directory, ignore_errors=True)
