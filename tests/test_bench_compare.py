@@ -82,10 +82,12 @@ def test_rasterizing_one_triangle_covers_the_texel_centres_inside_it():
 
 def test_weights_make_the_rms_area_weighted():
     texels = compare.common_texels(OURS, REFERENCE)
-    weights = {"A": np.array([[3.0, 1.0]]), "B": np.array([[0.0, 2.0]])}
+    weights = {"A": np.array([[3.0, 1.0]]), "B": np.array([[np.nan, 2.0]])}  # B's first is not compared anyway
     # A: 3 · 1 against (3 + 1) · 14; B: 2 · 1 against 2 · 4
     assert compare.texel_relative_rms(OURS, REFERENCE, texels, weights) == pytest.approx(np.sqrt(5 / 64))
     assert compare.compare(OURS, REFERENCE, weights=weights)["texel_rms"] == pytest.approx(np.sqrt(5 / 64))
+    weights["A"] = np.array([[np.nan, 1.0]])  # a texel without a weight counts 0: A gives 0 against 14
+    assert compare.texel_relative_rms(OURS, REFERENCE, texels, weights) == pytest.approx(np.sqrt(2 / 22))
 
 
 def test_inside_box_with_margin_and_uncovered_texels():

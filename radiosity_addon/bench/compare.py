@@ -43,13 +43,15 @@ def _sum_of_squares(images: dict, texels: dict, weights: dict | None = None) -> 
     total = 0.0
     for name, mask in texels.items():
         squares = (images[name][..., :3][mask] ** 2).sum(axis=-1)
-        total += float((squares * weights[name][mask]).sum() if weights is not None else squares.sum())
+        if weights is not None:  # a texel without a weight (NaN: rasterize_texels missed its centre) counts 0
+            squares = squares * np.nan_to_num(weights[name][mask], nan=0.0)
+        total += float(squares.sum())
     return total
 
 
 def texel_relative_rms(ours: dict, reference: dict, texels: dict, weights: dict | None = None) -> float:
     """sqrt(Σ w |ours − ref|² / Σ w |ref|²), RGB, over the `texels` (common_texels) of all objects;
-    w = 1 (each texel once) unless `weights` {object: (H, W)} are given (e.g. texel areas)."""
+    w = 1 (each texel once) unless `weights` {object: (H, W)} are given (e.g. texel areas; NaN counts 0)."""
     difference = {name: ours[name] - reference[name] for name in texels}
     scale = _sum_of_squares(reference, texels, weights)
     return float(np.sqrt(_sum_of_squares(difference, texels, weights) / scale)) if scale > 0 else float("nan")
