@@ -13,6 +13,7 @@ import pytest
 
 from radiosity_addon.bench import blend_lightmaps, blend_reference, compare, room_layout, rooms
 from radiosity_addon.blender.headless import HeadlessBake, bake_file
+from radiosity_addon.blender.lights import world_colour
 
 
 def meshes():
@@ -100,6 +101,14 @@ def test_triangle_count_follows_the_target_and_its_closed_form():
         assert summary["triangles"] == room_layout.predicted_triangles(room_layout.Detail(**summary["detail"]))
     assert counts[1000] < 1.3 * 1000
     assert 0.8 * 4000 < counts[4000] <= 4000 and 0.8 * 16000 < counts[16000] <= 16000
+
+
+def test_world_colour_is_a_sky_the_addon_reads():
+    rooms.build_room(1000, world_colour=(0.1, 0.2, 0.3))
+    warnings = []
+    assert world_colour(bpy.context.scene.world, warnings) == pytest.approx([0.1, 0.2, 0.3]) and not warnings
+    rooms.build_room(1000)
+    assert world_colour(bpy.context.scene.world, warnings) is None  # black: no sky
 
 
 def test_command_line_saves_a_room(tmp_path):
