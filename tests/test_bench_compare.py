@@ -37,6 +37,7 @@ def test_object_means_errors_and_worst_object():
     assert errors["B"]["relative"][0] == pytest.approx(-0.5)
     assert np.isnan(errors["B"]["relative"][1:]).all()  # the reference's green and blue are 0
     assert errors["B"]["texels"] == 1
+    assert (errors["A"]["rms"], errors["B"]["rms"]) == (pytest.approx(np.sqrt(1 / 28)), pytest.approx(0.5))
     assert compare.worst_object(errors) == ("B", pytest.approx(-0.5))
 
 

@@ -35,7 +35,7 @@ def summary_of(result: dict) -> dict:
     worst, error = result["worst_object"]
     return {"texel_rms": result["texel_rms"], "texel_rms_inside": result["texel_rms_inside"],
             "worst_object": worst, "worst_object_error": error,
-            "objects": {name: e["relative_rgb"] for name, e in result["objects"].items()}}
+            "objects": {name: {"mean_error": e["relative_rgb"], "rms": e["rms"]} for name, e in result["objects"].items()}}
 
 
 def main() -> int:

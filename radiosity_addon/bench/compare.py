@@ -64,7 +64,7 @@ def channel_means(images: dict, texels: dict) -> dict:
 
 def object_errors(ours: dict, reference: dict, texels: dict) -> dict:
     """{object: {"ours", "reference" (mean RGB), "relative" (per channel, NaN where the reference's
-    mean is 0), "relative_rgb" (of the RGB sums), "texels"}}."""
+    mean is 0), "relative_rgb" (of the RGB sums), "rms" (the object's own texel relative RMS), "texels"}}."""
     mine, theirs = channel_means(ours, texels), channel_means(reference, texels)
     errors = {}
     for name in theirs:
@@ -73,6 +73,7 @@ def object_errors(ours: dict, reference: dict, texels: dict) -> dict:
         total = theirs[name].sum()
         errors[name] = {"ours": mine[name], "reference": theirs[name], "relative": relative,
                         "relative_rgb": float(difference.sum() / total) if total > 0 else float("nan"),
+                        "rms": texel_relative_rms(ours, reference, {name: texels[name]}),
                         "texels": int(texels[name].sum())}
     return errors
 
