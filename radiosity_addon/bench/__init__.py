@@ -1,4 +1,6 @@
-"""The benchmark: what accuracy costs in time, with Cycles as the peer (`python -m radiosity_addon bench`).
+"""The benchmark: what accuracy costs in time, with Cycles as the peer (`python -m radiosity_addon bench`),
+and its furnished rooms with their Cycles reference (`rooms`, `blend_reference`, `compare`).
 
-bpy-free except `reference`, which calls `radiosity_addon.blender.cycles_reference` lazily.
+bpy is imported only by the modules that build, bake or read .blend files (`blend_*`, `cycles`,
+`rooms`), lazily where the bpy-free sweep calls them; `compare`, `shapes` and `room_layout` are numpy only.
 """

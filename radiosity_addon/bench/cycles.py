@@ -79,27 +79,35 @@ def _surface_object(bpy, surface, resolution):
     return obj, image
 
 
-def _configure_cycles(bpy, samples: int, seed: int, threads: int | None):
-    scene = bpy.context.scene
+def reproducible_cycles(scene, samples: int, seed: int, bounces: int, threads: int | None = None) -> None:
+    """Render settings for an unbiased, repeatable bake: Cycles on the CPU, `samples` everywhere
+    (no adaptive sampling), a fixed seed, `bounces` diffuse bounces, no clamping, no denoising."""
     scene.render.engine = "CYCLES"
     cycles = scene.cycles
     cycles.device = "CPU"
     cycles.samples = samples
     cycles.use_adaptive_sampling = False
+    cycles.use_denoising = False
     cycles.seed = seed
-    cycles.max_bounces = MAX_BOUNCES
-    cycles.diffuse_bounces = MAX_BOUNCES
+    cycles.use_animated_seed = False
+    cycles.max_bounces = cycles.diffuse_bounces = bounces
+    cycles.sample_clamp_direct = 0.0  # clamping biases the answer; a reference must not clamp
+    cycles.sample_clamp_indirect = 0.0
+    if threads:
+        scene.render.threads_mode = "FIXED"
+        scene.render.threads = threads
+
+
+def _configure_cycles(bpy, samples: int, seed: int, threads: int | None):
+    scene = bpy.context.scene
+    reproducible_cycles(scene, samples, seed, MAX_BOUNCES, threads)
+    cycles = scene.cycles
     cycles.glossy_bounces = 0
     cycles.transmission_bounces = 0
     cycles.volume_bounces = 0
     cycles.transparent_max_bounces = 0
-    cycles.sample_clamp_direct = 0.0  # clamping biases the answer; the reference must not clamp
-    cycles.sample_clamp_indirect = 0.0
     cycles.caustics_reflective = False
     cycles.caustics_refractive = False
-    if threads:
-        scene.render.threads_mode = "FIXED"
-        scene.render.threads = threads
     world = bpy.data.worlds.new("black")
     world.color = (0.0, 0.0, 0.0)
     if world.node_tree is not None:

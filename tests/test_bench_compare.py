@@ -1,0 +1,97 @@
+"""compare.py's metrics on small arrays whose answers are worked out by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from radiosity_addon.bench import compare
+
+
+def image(*texels):
+    """A one-row lightmap of (r, g, b, alpha) texels."""
+    return np.array([texels], dtype=np.float64)
+
+
+OURS = {"A": image((2, 2, 3, 1), (1, 2, 3, 1)), "B": image((9, 9, 9, 1), (1, 0, 0, 1))}
+REFERENCE = {"A": image((1, 2, 3, 1), (1, 2, 3, 1)), "B": image((0, 0, 0, 0), (2, 0, 0, 1))}
+
+
+def test_texel_rms_counts_every_common_texel_once():
+    texels = compare.common_texels(OURS, REFERENCE)
+    assert [m.tolist() for m in texels.values()] == [[[True, True]], [[False, True]]]  # B's first: not baked
+    # A: |(1, 0, 0)|² = 1 against 2 · (1 + 4 + 9) = 28; B: |(−1, 0, 0)|² = 1 against 4
+    assert compare.texel_relative_rms(OURS, REFERENCE, texels) == pytest.approx(np.sqrt(2 / 32))
+
+
+def test_mask_limits_the_texels():
+    texels = compare.common_texels(OURS, REFERENCE, {"A": np.array([[True, False]])})
+    assert compare.texel_relative_rms(OURS, REFERENCE, texels) == pytest.approx(np.sqrt(2 / 18))
+
+
+def test_object_means_errors_and_worst_object():
+    errors = compare.object_errors(OURS, REFERENCE, compare.common_texels(OURS, REFERENCE))
+    assert errors["A"]["ours"] == pytest.approx([1.5, 2, 3])
+    assert errors["A"]["relative"] == pytest.approx([0.5, 0, 0])
+    assert errors["A"]["relative_rgb"] == pytest.approx(0.5 / 6)
+    assert errors["B"]["relative"][0] == pytest.approx(-0.5)
+    assert np.isnan(errors["B"]["relative"][1:]).all()  # the reference's green and blue are 0
+    assert errors["B"]["texels"] == 1
+    assert (errors["A"]["rms"], errors["B"]["rms"]) == (pytest.approx(np.sqrt(1 / 28)), pytest.approx(0.5))
+    assert compare.worst_object(errors) == ("B", pytest.approx(-0.5))
+
+
+def test_compare_summary_inside_and_out():
+    result = compare.compare(OURS, REFERENCE, inside={"A": np.array([[True, False]]), "B": np.array([[True, True]])})
+    assert result["texel_rms"] == pytest.approx(0.25)
+    assert result["texel_rms_inside"] == pytest.approx(1 / 3)
+    assert (result["texels"], result["texels_inside"]) == (3, 2)
+
+
+def test_relative_noise():
+    noise = {"A": image((0.1, 0, 0, 1), (0, 0.2, 0, 1)), "B": image((5, 5, 5, 0), (0, 0, 0, 1))}
+    texels = compare.common_texels(OURS, REFERENCE)
+    assert compare.relative_noise(noise, REFERENCE, texels) == pytest.approx(np.sqrt(0.05 / 32))
+
+
+def test_sizes_must_match():
+    with pytest.raises(ValueError, match="bake the reference at our sizes"):
+        compare.common_texels({"A": np.zeros((2, 2, 4))}, {"A": np.zeros((2, 3, 4))})
+
+
+def test_rasterized_positions_interpolate_the_corners_and_areas_divide_the_surface():
+    # the UV square in two triangles onto the world rectangle x ∈ [0, 2], y ∈ [0, 1] at z = 5
+    uv = np.array([[(0, 0), (1, 0), (1, 1)], [(0, 0), (1, 1), (0, 1)]], dtype=float)
+    world = np.array([[(0, 0, 5), (2, 0, 5), (2, 1, 5)], [(0, 0, 5), (2, 1, 5), (0, 1, 5)]], dtype=float)
+    positions, areas = compare.rasterize_texels(uv, world, width=4, height=2)
+    rows, columns = np.mgrid[0:2, 0:4]
+    expected = np.stack([(columns + 0.5) / 2, (rows + 0.5) / 2, np.full((2, 4), 5.0)], axis=-1)
+    np.testing.assert_allclose(positions, expected, atol=1e-12)
+    np.testing.assert_allclose(areas, 2.0 / 8)  # 2 m² over 8 texels
+
+
+def test_rasterizing_one_triangle_covers_the_texel_centres_inside_it():
+    # the lower right half of a 4 × 4 map: centres with v ≤ u, the diagonal's 4 included: 10 texels
+    uv = np.array([[(0, 0), (1, 0), (1, 1)]], dtype=float)
+    world = np.array([[(0, 0, 0), (3, 0, 0), (3, 0, 3)]], dtype=float)  # 4.5 m² on 8 texels' worth of UV
+    positions, areas = compare.rasterize_texels(uv, world, width=4, height=4)
+    covered = ~np.isnan(positions[..., 0])
+    rows, columns = np.mgrid[0:4, 0:4]
+    assert covered.tolist() == (rows <= columns).tolist()
+    np.testing.assert_allclose(areas[covered], 4.5 / 8)
+
+
+def test_weights_make_the_rms_area_weighted():
+    texels = compare.common_texels(OURS, REFERENCE)
+    weights = {"A": np.array([[3.0, 1.0]]), "B": np.array([[np.nan, 2.0]])}  # B's first is not compared anyway
+    # A: 3 · 1 against (3 + 1) · 14; B: 2 · 1 against 2 · 4
+    assert compare.texel_relative_rms(OURS, REFERENCE, texels, weights) == pytest.approx(np.sqrt(5 / 64))
+    assert compare.compare(OURS, REFERENCE, weights=weights)["texel_rms"] == pytest.approx(np.sqrt(5 / 64))
+    weights["A"] = np.array([[np.nan, 1.0]])  # a texel without a weight counts 0: A gives 0 against 14
+    assert compare.texel_relative_rms(OURS, REFERENCE, texels, weights) == pytest.approx(np.sqrt(2 / 22))
+
+
+def test_inside_box_with_margin_and_uncovered_texels():
+    positions = np.array([[(0.5, 0.5, 0.5), (-0.005, 0.2, 0.2), (-0.05, 0.2, 0.2), (np.nan, np.nan, np.nan)]])
+    inside = compare.inside_box(positions, (0, 0, 0), (1, 1, 1), margin=0.01)
+    assert inside.tolist() == [[True, True, False, False]]
