@@ -122,14 +122,16 @@ def cornell_dict():
 
 @pytest.fixture(scope="module")
 def cornell_baseline(gpu, cornell_dict):
-    return solve(scene_from_dict(cornell_dict), hemicube(subdiv=3, hemicube_res=64, solver="gauss-seidel"),
-                 gpu=gpu)
+    return solve(scene_from_dict(cornell_dict), hemicube(subdiv=3, hemicube_res=64, solver="gauss-seidel",
+                                                         refinements=0), gpu=gpu)
 
 
 @pytest.mark.parametrize("length, emission", [(1e-4, 1.0), (1e4, 1.0), (1.0, 1e6)])
 def test_cornell_box_is_scale_and_emission_invariant(gpu, cornell_dict, cornell_baseline, length, emission):
     scene = scene_from_dict(scaled_scene(cornell_dict, length, emission))
-    solution = solve(scene, hemicube(subdiv=3, hemicube_res=64, solver="gauss-seidel"), gpu=gpu)
+    # no refinement: its split decisions compare float32 light with a threshold, and a patch on
+    # the edge may go either way at another scale (the solve itself is what this test measures)
+    solution = solve(scene, hemicube(subdiv=3, hemicube_res=64, solver="gauss-seidel", refinements=0), gpu=gpu)
     assert_physical(solution)
     expected = cornell_baseline.patch_radiosity
     ours = solution.patch_radiosity / emission
