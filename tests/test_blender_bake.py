@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from radiosity_addon.blender.bake import bake_blocking
+from radiosity_addon.blender.material_bake import bake_material_maps
 from radiosity_addon.core import SolveCancelled
 
 
@@ -55,6 +56,15 @@ def test_two_bakes_leave_one_image_per_object_and_no_extra_materials():
     support.open_blend(support.CORNELL)
     assert bake() == {"FINISHED"}
     first = support.blend_state()
+    # a re-bake reads the materials through their own shading, not through the bake they show
+    floor = bpy.data.objects["floor"]
+    outputs = [(n.name, n.is_active_output) for n in floor.active_material.node_tree.nodes
+               if n.bl_idname == "ShaderNodeOutputMaterial"]
+    maps = bake_material_maps(bpy.context, [floor], {"floor": (8, 8)})["floor"]
+    np.testing.assert_allclose(maps.albedo.mean(axis=(0, 1)), [0.725, 0.71, 0.68], atol=2e-3)
+    assert maps.emission.max() == 0
+    assert [(n.name, n.is_active_output) for n in floor.active_material.node_tree.nodes
+            if n.bl_idname == "ShaderNodeOutputMaterial"] == outputs
     assert bake() == {"FINISHED"}
     second = support.blend_state()
     assert second["images"] == first["images"] == sorted(f"{o.name}_lightmap" for o in mesh_objects())

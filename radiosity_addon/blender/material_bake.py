@@ -22,7 +22,7 @@ import bpy
 import numpy as np
 
 from ..core import MaterialMap
-from .tags import LIGHTMAP_UV, NODE_TAG
+from .tags import LIGHTMAP_UV, NODE_TAG, ORIGINAL_OUTPUT, original_output_node
 
 BAKE_SAMPLES = 4  # anti-aliasing within a texel: textures finer than a texel average out
 MARGIN = 2  # texels extended past every chart, so texels a face only grazes hold its values
@@ -107,6 +107,31 @@ def _default_materials(objects):
 
 
 @contextlib.contextmanager
+def _original_shading(objects):
+    """Materials that show an earlier bake render through their own output while Cycles bakes
+    them (else it would bake the lightmap's emission); every output's active flag is restored."""
+    outputs = {}
+    for obj in objects:
+        for slot in obj.material_slots:
+            material = slot.material
+            if material is None or material.node_tree is None or material.get(ORIGINAL_OUTPUT) is None:
+                continue
+            outputs[material.name] = (material, [(n, n.is_active_output) for n in material.node_tree.nodes
+                                                 if n.bl_idname == "ShaderNodeOutputMaterial"])
+    try:
+        for material, _ in outputs.values():
+            original = original_output_node(material)
+            if original is not None:
+                original.is_active_output = True
+        yield
+    finally:
+        for _, flags in outputs.values():
+            for node, active in flags:
+                if active:
+                    node.is_active_output = True
+
+
+@contextlib.contextmanager
 def _bake_targets(objects, images: dict):
     """Every material of `objects` gets an active Image Texture node showing its object's image."""
     added, active = [], {}
@@ -147,7 +172,7 @@ def bake_material_maps(context, objects, sizes: dict) -> dict:
     view_layer = context.view_layer
     selected, active_object = [o for o in view_layer.objects if o.select_get()], view_layer.objects.active
     try:
-        with _cycles_for_baking(context.scene), _default_materials(objects):
+        with _cycles_for_baking(context.scene), _default_materials(objects), _original_shading(objects):
             for group in _bake_groups(objects):
                 with _bake_targets(group, images):
                     for obj in view_layer.objects:

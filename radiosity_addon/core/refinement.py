@@ -64,8 +64,25 @@ def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: fl
     return split
 
 
-def refine(gpu, scene, patches: Patches, backs, settings, effects, timer) -> tuple[Patches, list[int]]:
-    """`patches` split where the direct light changes fast, and how many were split per round."""
+def within_budget(patches: Patches, split: np.ndarray, budget: int | None) -> np.ndarray:
+    """`split` cut down, largest patches first, so that the split patches number at most `budget`
+    (each split adds three)."""
+    if budget is None:
+        return split
+    room = max(0, (budget - len(patches)) // 3)
+    chosen = np.flatnonzero(split)
+    if len(chosen) <= room:
+        return split
+    kept = chosen[np.argsort(-patches.area[chosen], kind="stable")[:room]]
+    limited = np.zeros_like(split)
+    limited[kept] = True
+    return limited
+
+
+def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
+           budget: int | None = None) -> tuple[Patches, list[int]]:
+    """`patches` split where the direct light changes fast, and how many were split per round;
+    never more than `budget` patches in all (the hemi-cube method's matrices must fit)."""
     from dataclasses import replace
 
     probe = replace(settings, elements=max(settings.elements, PROBE_ELEMENTS))
@@ -74,7 +91,8 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer) -> tup
         with timer.stage("refine"):
             _, _, light, _, _ = solve_progressive(gpu, scene, patches, probe, effects, StageTimer(), direct_only=True)
             min_size = SMALLEST_PATCH * scene.diameter
-            split = patches_to_refine(patches, light, settings.refine_threshold, min_size)
+            split = within_budget(patches, patches_to_refine(patches, light, settings.refine_threshold, min_size),
+                                  budget)
             if not split.any():
                 break
             refined.append(int(split.sum()))

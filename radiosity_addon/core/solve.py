@@ -13,7 +13,7 @@ import numpy as np
 
 from .gpu import GPU, open_gpu
 from .hemicube import solve_hemicube
-from .hemicube.form_factors import check_memory
+from .hemicube.form_factors import check_memory, patch_budget
 from .method_choice import choose_method
 from .progressive import solve_progressive
 from .report import Counts, Report
@@ -47,9 +47,11 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
         if scene.material_maps:
             with timer.stage("materials"):
                 patches.reflectance, patches.emission = patch_material_values(solve_gpu, scene, patches)
-        if settings.method == "hemicube":  # refuse before any GPU work: refinement only adds patches
+        budget = None
+        if settings.method == "hemicube":  # refuse before any GPU work; refinement stays within the matrices' memory
             check_memory(len(patches), settings.memory_limit_bytes, settings.hemicube_elements)
-        patches, refined = refine(solve_gpu, scene, patches, backs, settings, effects, timer)
+            budget = patch_budget(settings.memory_limit_bytes, settings.hemicube_elements)
+        patches, refined = refine(solve_gpu, scene, patches, backs, settings, effects, timer, budget)
         choice = None
         if settings.method == "auto":
             choice = choose_method(patches, settings)
@@ -82,10 +84,11 @@ def _solve_patches(gpu: GPU, scene: Scene, patches, settings: SolveSettings, eff
         areas = element_areas(patches, settings.hemicube_elements)
         return (radiosity, elements, patch_means(areas, element_light), element_light,
                 patch_means(areas, element_direct), element_direct, details)
+    areas = element_areas(patches, settings.elements)
     shown = None if preview is None else (
-        lambda patch_values, element_values: preview(Solution(patches, patch_values, element_values)))
+        lambda radiosity, light: preview(Solution(patches, patch_means(areas, radiosity), radiosity,
+                                                  patch_light=patch_means(areas, light), element_light=light)))
     radiosity, elements, element_light, element_direct, details = solve_progressive(
         gpu, scene, patches, settings, effects, timer, progress, should_cancel, shown, preview_interval)
-    areas = element_areas(patches, settings.elements)
     return (radiosity, elements, patch_means(areas, element_light), element_light,
             patch_means(areas, element_direct), element_direct, details)

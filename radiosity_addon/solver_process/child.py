@@ -10,6 +10,7 @@ so it imports numpy, moderngl and this package exactly as Blender would. Nothing
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
 import threading
@@ -88,7 +89,9 @@ class Solve:
         def show(snapshot) -> None:
             self.previews += 1
             path = self.directory / f"preview-{self.previews}.npz"
-            protocol.save_images(path, lightmap_images(scene, snapshot, objects, settings, gpu))
+            # no direct light per texel in a snapshot: its light is the solve's, patch by patch
+            quick = dataclasses.replace(settings, direct_per_texel=False)
+            protocol.save_images(path, lightmap_images(scene, snapshot, objects, quick, gpu))
             self.pipe.send("preview", file=path.name)
         return show
 

@@ -23,6 +23,11 @@ def matrix_bytes(patch_count: int, elements: int = 1) -> int:
     return patch_count * patch_count * 4 * (1 + elements * elements + 2)
 
 
+def patch_budget(limit_bytes: int, elements: int = 1) -> int:
+    """The most patches whose matrices fit in `limit_bytes`."""
+    return int((limit_bytes / (4 * (1 + elements * elements + 2))) ** 0.5)
+
+
 def check_memory(patch_count: int, limit_bytes: int, elements: int = 1) -> None:
     need = matrix_bytes(patch_count, elements)
     if need > limit_bytes:

@@ -78,8 +78,9 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
     direct part (lamps and emitters, not the sky), ProgressiveDetails), with B = E + ρH.
     `effects` (the scene analysis) may switch off visibility maps (nothing occludes) and
     residual updates (no interreflection: only emitters and lamps ever shoot).
-    `preview(patch radiosity, element radiosity)` is called every `preview_interval` seconds with
-    the radiosity so far plus the ambient term ρ · Ambient (for display only). With `direct_only`
+    `preview(element radiosity, element light)` is called every `preview_interval` seconds with
+    the radiosity so far plus the ambient term ρ · Ambient, and the light so far plus Ambient
+    (for display only). With `direct_only`
     it stops once the lamps and emitters have shot (what the refinement estimates from)."""
     started = time.perf_counter()
     variant = VARIANTS[settings.visibility]
@@ -140,8 +141,9 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                           "ambient": ambient(unshot_gpu).tolist()})
             if preview is not None and time.perf_counter() - last_preview >= preview_interval:
                 with timer.stage("preview"):
-                    shown = textures.read_radiosity() + patches.reflectance[:, None, None, :] * ambient(unshot_gpu)
-                    preview(patch_means(textures.areas, shown), shown)
+                    extra = ambient(unshot_gpu)
+                    preview(textures.read_radiosity() + patches.reflectance[:, None, None, :] * extra,
+                            textures.read_light() + extra)
                 last_preview = time.perf_counter()
             if not forced and direct_light is None:
                 direct_light = lamp_light + textures.read_light() - before_emitters
