@@ -5,8 +5,9 @@ The file is baked as its author made it: its materials, lamps, world, modifiers 
 faces (emissive backs included) are left alone. Only the render settings are set (Cycles on the
 CPU, no clamping, MAX_BOUNCES diffuse bounces, no denoising, no adaptive sampling, a fixed
 seed), and what a bake needs is added in memory, never saved: a target image node in each
-material, and a copy of a material that two baked objects share (an image node can hold only one
-object's image; the copy shades the same). All objects are baked in one `bpy.ops.object.bake`
+material, a copy of a material that two baked objects share (an image node can hold only one
+object's image; the copy shades the same), and Blender's default material for an object that has
+none (Cycles renders it so: `default_materials`). All objects are baked in one `bpy.ops.object.bake`
 call per content, each into its own image.
 
 Two contents:
@@ -59,16 +60,37 @@ def _shared_materials(objects) -> set:
     return {material for material, count in users.items() if count > 1}
 
 
+def default_materials(obj) -> None:
+    """Give an object without a material (no slot, or an empty one) a new material, which Blender
+    makes as its default surface: Cycles renders a mesh without a material exactly so (measured: a
+    render with either is the same to the last bit), and a bake needs a material to hold its image
+    node. Each object gets its own; a mesh without slots gets one slot (every user of the mesh
+    renders it alike)."""
+    def default():
+        material = bpy.data.materials.new(f"{obj.name} default surface (reference bake only)")
+        if material.node_tree is None:  # Blender 4.x makes the node tree on request
+            material.use_nodes = True
+        return material
+
+    if not obj.material_slots:
+        obj.data.materials.append(None)
+    for slot in obj.material_slots:
+        if slot.material is None:
+            slot.link = "OBJECT"
+            slot.material = default()
+
+
 def add_bake_targets(objects, sizes: dict) -> dict:
     """One zeroed float image per object, the active image node of each of its materials; a
-    material shared between baked objects is copied for each of them. Returns {name: image}."""
+    material shared between baked objects is copied for each of them, an object without a material
+    gets Blender's default one. Returns {name: image}."""
+    for obj in objects:
+        if UV_MAP not in obj.data.uv_layers:
+            raise ValueError(f"object '{obj.name}' has no '{UV_MAP}' UV map")
+        default_materials(obj)
     shared = _shared_materials(objects)
     images = {}
     for obj in objects:
-        if not obj.material_slots or any(slot.material is None for slot in obj.material_slots):
-            raise ValueError(f"object '{obj.name}' has an empty material slot: Cycles cannot bake it")
-        if UV_MAP not in obj.data.uv_layers:
-            raise ValueError(f"object '{obj.name}' has no '{UV_MAP}' UV map")
         width, height = sizes[obj.name]
         image = bpy.data.images.new(f"reference {obj.name}", width, height, alpha=True, float_buffer=True)
         image.pixels.foreach_set(np.zeros(width * height * 4, dtype=np.float32))  # alpha 0: not baked

@@ -1,0 +1,313 @@
+"""The issue-11 samples (tools/make_sample_blends.py) baked by the add-on agree with Cycles baking
+the same, unmodified files on the same 'Lightmap' UV maps (bench/blend_reference.py).
+
+Each sample is baked once per content with the add-on's own path (what the Bake operator runs:
+`bake_blocking` on the selected meshes, quality "good", method "auto") and once by Cycles — CPU,
+128 bounces, no clamping, no denoising, no adaptive sampling — at SAMPLES paths per texel with
+each of two seeds. The reference is their mean; half their difference is its own noise. Both
+contents are compared: "light" (Cycles' Diffuse pass, Direct + Indirect without Color) and
+"combined" (Cycles' Combined pass).
+
+Per object and channel the means over the texels both cover must agree within 5 % (channels
+darker than 2 % of the object's brightest are skipped, as in the Cornell test). The texel
+relative RMS must be within 10 % once the reference's own noise is taken out
+(rms² = error² + noise² for independent noise: the test asserts (rms² − noise²)/(1 − noise²) ≤
+0.1²), where that noise is at most NOISE_LIMIT. Texels hidden in contact with another surface
+(`in_contact`: a cube's bottom on the floor and the floor under it, leg tops under a seat) are
+left out: neither bake can show them, and Cycles' ray offsets light an emissive cube's bottom
+and the floor under it through a zero gap.
+
+Disagreements measured beyond the tolerances are marked xfail(strict=True) with their numbers,
+one object and content at a time: the references and the samples are never changed to agree.
+The Cycles bakes are cached in sample_blends/.cycles/ (keyed by each file's content hash), so a
+rerun on the same samples bakes only with the add-on.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from dataclasses import dataclass
+
+import blender_support as support
+import bpy
+import numpy as np
+import pytest
+
+from radiosity_addon.bench import blend_lightmaps, blend_reference, compare
+from radiosity_addon.blender.bake import bake_blocking
+from radiosity_addon.blender.headless import HeadlessBake, bake_file
+from radiosity_addon.blender.tags import lightmap_image_name
+from tools.make_sample_blends import CHAIR_AT, RUG
+
+TEXEL_DENSITY = 16.0  # texels per metre: 6 cm texels, a 3 m wall 48 texels across
+SAMPLES = 96  # Cycles paths per texel and seed (two seeds)
+MEAN_TOLERANCE = 0.05
+RMS_TOLERANCE = 0.10
+NOISE_LIMIT = 0.15  # the reference's own relative noise under which its texel RMS can be judged
+DARK = 0.02  # channels under this fraction of the object's brightest are not compared
+CACHE = support.SAMPLES / ".cycles"
+CONTACT = 0.001  # metres: a surface this close in front of a texel hides it
+
+# the objects that get lightmaps, per sample, and the contents each sample is compared in
+OBJECTS = {
+    "emissive_ceiling": ["Room", "Crate", "Ceiling Light"],
+    "thin_walls": ["Room", "Partition", "Shelf"],
+    "textured": ["Room", "Floor", "Back Wall", "Rug"],
+    "node_materials": ["Room", "Emission Panel", "Diffuse Cube", "Mix Cube", "Add Cube", "Plain Cube"],
+    "instances": ["Room", "Chair Copy"],
+}
+CONTENTS = {"emissive_ceiling": ("light", "combined"), "thin_walls": ("light",), "textured": ("light", "combined"),
+            "node_materials": ("light", "combined"), "instances": ("light",)}
+# an Emission shader has no diffuse closure: Cycles' Diffuse pass of it is black by definition
+NOT_COMPARED = {("node_materials", "light", "Emission Panel")}
+
+# measured disagreements (SAMPLES = 96, TEXEL_DENSITY = 16): xfail, strict, with their numbers
+# (hemi-cube method, which "auto" picks on every sample). emissive_ceiling: the light's back lights
+# the ceiling 4 mm above it, but the light that bounces between the two is missing: the ceiling
+# above the light gets H = 12.2 (red) where Cycles gets 26.8 = E / (1 - 0.7 * 0.8) (0.455 of it),
+# so the room is 28-35 % too dark; the light's own front (facing the floor, which is 1 % dark) is
+# 5 % too dark, a cause not isolated (the progressive method gets the ceiling right but leaks:
+# the rest of the room 1.8x too bright).
+CEILING = "the ceiling above the light 0.455 of Cycles (no bounce between it and the light's back)"
+KNOWN_MEANS = {
+    ("emissive_ceiling", "light", "Room"): f"ours/Cycles R 0.721 G 0.712 B 0.695; {CEILING}",
+    ("emissive_ceiling", "combined", "Room"): f"ours/Cycles R 0.694 G 0.678 B 0.645; {CEILING}",
+    ("emissive_ceiling", "light", "Ceiling Light"): "ours/Cycles R 0.952 G 0.949 B 0.950 (Cycles' noise on this"
+                                                    " mean: 0.8 %); the floor it faces is 1 % dark",
+}
+KNOWN_RMS = {
+    ("emissive_ceiling", "light", "Room"): f"texel RMS 0.552, Cycles' noise 0.031; {CEILING}",
+    ("emissive_ceiling", "combined", "Room"): f"texel RMS 0.553, Cycles' noise 0.031; {CEILING}",
+}
+
+
+@dataclass
+class Comparison:
+    ours: dict  # {object: (H, W, 4)}
+    reference: dict
+    noise: dict
+    texels: dict  # {object: bool (H, W)} compared texels
+    positions: dict  # {object: (H, W, 3)} world position of each texel centre
+    report: dict  # the add-on's solve report
+    seconds: dict
+
+
+def mesh_objects() -> list:
+    return [obj for obj in bpy.context.view_layer.objects if obj.type == "MESH"]
+
+
+def prune_cache() -> None:
+    """Cycles bakes of samples older than the current ones (their hashes will not come again)."""
+    if CACHE.is_dir() and support.SAMPLES_MADE.exists():
+        made = support.SAMPLES_MADE.stat().st_mtime
+        for stale in CACHE.glob("cycles_*.npz"):
+            if stale.stat().st_mtime < made:
+                stale.unlink()
+
+
+def world_triangles():
+    """A BVH tree of every triangle the depsgraph renders (instances included), in world space."""
+    from mathutils.bvhtree import BVHTree
+
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    vertices, triangles = [], []
+    for instance in depsgraph.object_instances:
+        if instance.object.type != "MESH":
+            continue
+        evaluated = instance.object
+        mesh = evaluated.to_mesh()
+        try:
+            mesh.calc_loop_triangles()
+            matrix = np.array(instance.matrix_world, dtype=np.float64)
+            local = np.array([v.co[:] for v in mesh.vertices], dtype=np.float64)
+            offset = len(vertices)
+            vertices += (local @ matrix[:3, :3].T + matrix[:3, 3]).tolist()
+            triangles += [[offset + k for k in triangle.vertices] for triangle in mesh.loop_triangles]
+        finally:
+            evaluated.to_mesh_clear()
+    return BVHTree.FromPolygons(vertices, triangles, all_triangles=True)
+
+
+def in_contact(sizes: dict) -> dict:
+    """{object: bool (H, W)}: texels whose front touches another surface facing them (one within
+    CONTACT: a cube's bottom on the floor and the floor under it, leg tops under a seat). Such
+    faces are hidden: what either bake gives them is an artefact (Cycles' ray offsets let an
+    emissive bottom light the floor it stands on through a zero gap)."""
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    tree = world_triangles()
+    hidden = {}
+    for name, (width, height) in sizes.items():
+        uv, world = blend_lightmaps.lightmap_triangles(bpy.data.objects[name], depsgraph)
+        normals = np.cross(world[:, 1] - world[:, 0], world[:, 2] - world[:, 0])
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        positions, _ = compare.rasterize_texels(uv, world, width, height)
+        facing, _ = compare.rasterize_texels(uv, np.repeat(normals[:, None], 3, axis=1), width, height)
+        mask = np.zeros((height, width), dtype=bool)
+        for row, column in zip(*np.nonzero(np.isfinite(positions[..., 0]))):
+            normal = facing[row, column]
+            near = tree.find_nearest_range(positions[row, column].tolist(), CONTACT)
+            mask[row, column] = any(np.dot(found[1], normal) < -0.5 for found in near)
+        hidden[name] = mask
+    return hidden
+
+
+@functools.cache
+def compared(sample: str, content: str) -> Comparison:
+    """The add-on's bake of a sample and Cycles' of the same file, made once per test session."""
+    path = support.SAMPLES / f"{sample}.blend"
+    started = time.perf_counter()
+    support.open_blend(path, method="auto", quality="good", content=content)
+    bpy.context.scene.radiosity.texel_density = TEXEL_DENSITY
+    objects = mesh_objects()
+    assert sorted(obj.name for obj in objects) == sorted(OBJECTS[sample])
+    support.select_only(objects)
+    plan = bake_blocking(bpy.context, bpy.context.scene.radiosity.bake_options(objects), objects)
+    ours = {obj.name: support.image_rgba(bpy.data.images[lightmap_image_name(obj.name)]) for obj in objects}
+    sizes = blend_lightmaps.sizes_of(ours)
+    positions, _ = blend_lightmaps.texel_geometry(sizes)
+    hidden = in_contact(sizes)
+    baked = time.perf_counter()
+    prune_cache()
+    reference = blend_reference.reference_with_noise(path, sizes, content, SAMPLES, cache_dir=CACHE)
+    texels = compare.common_texels(ours, reference["images"], {name: ~mask for name, mask in hidden.items()})
+    return Comparison(ours=ours, reference=reference["images"], noise=reference["noise"], texels=texels,
+                      positions=positions, report=plan.report,
+                      seconds={"ours": baked - started, "cycles": time.perf_counter() - baked})
+
+
+def cases(known: dict):
+    for sample, contents in CONTENTS.items():
+        for content in contents:
+            for name in OBJECTS[sample]:
+                if (sample, content, name) in NOT_COMPARED:
+                    continue
+                reason = known.get((sample, content, name))
+                marks = [pytest.mark.xfail(strict=True, reason=f"measured: {reason}")] if reason else []
+                yield pytest.param(sample, content, name, marks=marks, id=f"{sample}-{content}-{name}")
+
+
+def means(images: dict, texels: dict, name: str) -> np.ndarray:
+    return images[name][..., :3][texels[name]].mean(axis=0)
+
+
+def region_mean(result: Comparison, images: dict, name: str, where) -> np.ndarray:
+    """Mean RGB of `images[name]` over the compared texels whose position satisfies `where`."""
+    with np.errstate(invalid="ignore"):
+        mask = result.texels[name] & where(result.positions[name])
+    assert mask.sum() >= 10, f"{name}: only {mask.sum()} texels in the region"
+    return images[name][..., :3][mask].mean(axis=0)
+
+
+@pytest.mark.parametrize("sample, content, name", list(cases(KNOWN_MEANS)))
+def test_object_means_agree_with_cycles_per_channel(sample, content, name):
+    result = compared(sample, content)
+    assert result.texels[name].sum() > 0.5 * (result.ours[name][..., 3] > 0.5).sum(), f"{name}: coverage differs"
+    ours, cycles = means(result.ours, result.texels, name), means(result.reference, result.texels, name)
+    assert cycles.max() > 0, f"{name}: Cycles baked it black"
+    failures = []
+    for channel in range(3):
+        if cycles[channel] < DARK * cycles.max():
+            continue
+        ratio = ours[channel] / cycles[channel]
+        if abs(ratio - 1) > MEAN_TOLERANCE:
+            failures.append(f"channel {'RGB'[channel]}: ours {ours[channel]:.4f} Cycles {cycles[channel]:.4f}"
+                            f" ratio {ratio:.3f}")
+    assert not failures, f"{sample} {content} {name}: " + "; ".join(failures)
+
+
+@pytest.mark.parametrize("sample, content, name", list(cases(KNOWN_RMS)))
+def test_texel_rms_agrees_with_cycles_within_its_noise(sample, content, name):
+    result = compared(sample, content)
+    only = {name: result.texels[name]}
+    rms = compare.texel_relative_rms(result.ours, result.reference, only)
+    noise = compare.relative_noise(result.noise, result.reference, only)
+    if noise > NOISE_LIMIT:
+        pytest.skip(f"Cycles' own noise {noise:.3f} at {SAMPLES} samples is above {NOISE_LIMIT}")
+    error = np.sqrt(max(rms**2 - noise**2, 0.0) / (1 - noise**2))
+    assert error <= RMS_TOLERANCE, f"{sample} {content} {name}: texel RMS {rms:.3f}, Cycles' noise {noise:.3f}," \
+                                   f" so {error:.3f} of error"
+
+
+def test_closed_meshes_skip_their_backs_and_lit_planes_simulate_theirs():
+    """emissive_ceiling: the room (closed, facing in) and the crate (closed, facing out) have 12
+    faces whose backs see only their own dark side; the ceiling light's one face emits on its back.
+    thin_walls: the partition and the shelf board are lit on both sides; the room's 6 are skipped."""
+    for sample, expected in (("emissive_ceiling", (1, 12)), ("thin_walls", (2, 6))):
+        effects = compared(sample, "light").report["effects"]
+        assert (effects["back_sides"], effects["back_sides_skipped"]) == expected, sample
+
+
+def test_the_skipped_backs_change_nothing(tmp_path):
+    """The same bake (draft) with the skips disabled simulates every back, with twice the patches,
+    and gives the same lightmaps but for the discretization: the back patches lie on the fronts'
+    planes and change the hemi-cubes' aliasing (measured: means within 1.2 %, texel RMS 1.8 %)."""
+    results = {}
+    for skips in (True, False):
+        out = tmp_path / f"skips-{skips}"
+        _, report = bake_file(HeadlessBake(str(support.SAMPLES / "emissive_ceiling.blend"),
+                                           solve_options={"quality": "draft", "method": "hemicube",
+                                                          "skip_unneeded": skips},
+                                           lightmap_options={"texel_density": 8.0}, output_dir=str(out)))
+        results[skips] = (blend_lightmaps.read_lightmaps(out, OBJECTS["emissive_ceiling"]), report)
+    (skipped, with_skips), (full, without) = results[True], results[False]
+    assert without["effects"]["back_sides"] == 13 and with_skips["effects"]["back_sides"] == 1
+    assert with_skips["counts"]["patches"] < without["counts"]["patches"]
+    texels = compare.common_texels(skipped, full)
+    for name, error in compare.object_errors(skipped, full, texels).items():
+        assert np.all(np.abs(error["relative"]) < 0.02), f"{name}: the skipped backs changed the means by" \
+                                                         f" {error['relative']}"
+        assert error["rms"] < 0.03, f"{name}: the skipped backs changed the lightmap by {error['rms']:.4f} RMS"
+
+
+def red_over_green(colour: np.ndarray) -> float:
+    return float(colour[0] / colour[1])
+
+
+def test_the_red_rug_tints_the_wall_next_to_it_as_in_cycles():
+    """textured: the +x wall (x = 1.5) beside the rug, low down, against the same wall high up."""
+    result = compared("textured", "combined")
+    (_, y0), (_, y1) = RUG
+
+    def near(p):
+        return (p[..., 0] > 1.49) & (p[..., 1] > y0) & (p[..., 1] < y1) & (p[..., 2] < 0.4)
+
+    def far(p):
+        return (p[..., 0] > 1.49) & (p[..., 1] > y0) & (p[..., 1] < y1) & (p[..., 2] > 1.6)
+
+    tint = {}
+    for label, images in (("ours", result.ours), ("cycles", result.reference)):
+        tint[label] = (red_over_green(region_mean(result, images, "Room", near)),
+                       red_over_green(region_mean(result, images, "Room", far)))
+    assert tint["cycles"][0] > 1.05 * tint["cycles"][1], f"Cycles shows no tint: {tint}"
+    assert tint["ours"][0] > 1.05 * tint["ours"][1], f"our bake shows no tint: {tint}"
+    assert tint["ours"][0] == pytest.approx(tint["cycles"][0], rel=MEAN_TOLERANCE), tint
+
+
+def test_the_instanced_chair_casts_the_shadow_cycles_shows():
+    """instances: the floor under the instanced chair's seat against a ring around it, in the light
+    content (the direct light of the lamp above it is what the seat blocks)."""
+    result = compared("instances", "light")
+
+    def distance(p):
+        return np.hypot(p[..., 0] - CHAIR_AT[0], p[..., 1] - CHAIR_AT[1])
+
+    def under(p):
+        return (p[..., 2] < 0.001) & (distance(p) < 0.18)
+
+    def ring(p):
+        return (p[..., 2] < 0.001) & (distance(p) > 0.5) & (distance(p) < 0.75)
+
+    shadow = {label: region_mean(result, images, "Room", under).sum() / region_mean(result, images, "Room", ring).sum()
+              for label, images in (("ours", result.ours), ("cycles", result.reference))}
+    assert shadow["cycles"] < 0.7, f"Cycles shows no shadow: {shadow}"
+    assert shadow["ours"] == pytest.approx(shadow["cycles"], rel=0.10), shadow
+
+
+@pytest.mark.parametrize("sample", list(OBJECTS))
+def test_headless_bake_works_on_every_sample(sample, tmp_path):
+    summary, report = bake_file(HeadlessBake(str(support.SAMPLES / f"{sample}.blend"),
+                                             solve_options={"quality": "draft"}, output_dir=str(tmp_path)))
+    assert summary.startswith(f"baked {len(OBJECTS[sample])} object(s)")
+    assert sorted(p.name for p in tmp_path.glob("*.exr")) == sorted(f"{lightmap_image_name(n)}.exr"
+                                                                     for n in OBJECTS[sample])
