@@ -56,7 +56,7 @@ def add_solver_options(parser: argparse.ArgumentParser, defaults_from_file: bool
     """The solver options. An option not given takes the --quality preset's value (`solve`), or
     (`bake`, with `defaults_from_file`) leaves the .blend's own setting in place: either way it is
     left out of the parsed arguments."""
-    defaults = SolveSettings()  # the "good" preset
+    defaults = SolveSettings.preset("good")
     group = parser.add_argument_group("solver")
     group.add_argument("--quality", choices=QUALITIES, default=argparse.SUPPRESS if defaults_from_file else "good",
                        help="what every knob below defaults to: draft (fast), good, final (the README's"

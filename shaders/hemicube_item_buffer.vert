@@ -16,11 +16,14 @@ in vec3 in_forward;
 in vec4 in_tile;        // tile rectangle in atlas NDC: x0, y0, x1, y1
 in float in_up_min;     // -1 for the top face, 0 for the half side faces
 
+const float GRAZING = 1e-3;  // sin^2 of it: the form factor of the band it drops, 1e-6
+
 uniform float near;
 uniform float far;
 uniform uint back_item;  // what the back of a patch writes: it hides the sky but receives nothing
 
 flat out uint item;
+out float view_depth;   // c: distance along the face's axis (linear in the triangle: interpolates exactly)
 out float gl_ClipDistance[5];
 
 void main() {
@@ -34,14 +37,19 @@ void main() {
     gl_ClipDistance[1] = c + a;
     gl_ClipDistance[2] = c - b;
     gl_ClipDistance[3] = b - in_up_min * c;
-    gl_ClipDistance[4] = c - near;
+    // c >= near, and above the horizon by more than GRAZING (radians, about): the receiver's own
+    // plane (its surface, its back twin) lies at c ~ 0 and must never be seen, however near.
+    gl_ClipDistance[4] = c - max(near, GRAZING * length(d));
 
     // Face coordinates (a/c, b/c) mapped to the tile, written homogeneously in c
     // so perspective-correct rasterization still holds.
     float x = in_tile.x * c + 0.5 * (a + c) * (in_tile.z - in_tile.x);
     float y = in_tile.y * c + (b - in_up_min * c) / (1.0 - in_up_min) * (in_tile.w - in_tile.y);
-    float z = (c * (far + near) - 2.0 * far * near) / (far - near);
-    gl_Position = vec4(x, y, z, c);
+    // Depth is written per fragment as log(c / near) / log(far / near): the same relative precision
+    // at every distance, so `near` can be far below the 4 mm between an emitter and a ceiling
+    // (a projective depth would clip them apart or lose the far walls' order).
+    view_depth = c;
+    gl_Position = vec4(x, y, 0.0, c);
 
     // Item 0 means nothing is seen (sky); a back is its twin patch, or (single-sided) its own item.
     bool front = dot(in_eye - in_position, in_normal) > 0.0;

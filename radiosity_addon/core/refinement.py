@@ -65,15 +65,18 @@ def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: fl
 
 
 def within_budget(patches: Patches, split: np.ndarray, budget: int | None) -> np.ndarray:
-    """`split` cut down, largest patches first, so that the split patches number at most `budget`
-    (each split adds three)."""
+    """`split` cut down, largest patches first, so that the patches number at most `budget` once
+    split (a split adds three patches, six when the patch's back is simulated too)."""
     if budget is None:
         return split
-    room = max(0, (budget - len(patches)) // 3)
     chosen = np.flatnonzero(split)
-    if len(chosen) <= room:
+    paired = (patches.twin[chosen] >= 0) | (patches.back_of[chosen] >= 0)  # a back is split with its front
+    added = np.where(paired, 6, 3)
+    if len(patches) + added.sum() <= budget:
         return split
-    kept = chosen[np.argsort(-patches.area[chosen], kind="stable")[:room]]
+    order = np.argsort(-patches.area[chosen], kind="stable")
+    fits = np.cumsum(added[order]) <= budget - len(patches)
+    kept = chosen[order[fits]]
     limited = np.zeros_like(split)
     limited[kept] = True
     return limited

@@ -102,6 +102,9 @@ def scene_geometry(patches: Patches) -> tuple[np.ndarray, np.ndarray]:
     return vertices, indices[keep].astype(np.uint32)
 
 
+NEAR = 1e-7  # of the scene's diameter: nearer than that a hemi-cube sees nothing (depth is logarithmic)
+
+
 class HemicubeAtlas:
     """Hemi-cube item buffers of one set of patches, many per atlas, drawn by one instanced call:
     `draw(frames)` fills slots 0..len(frames) - 1 (front items: patch id + 1; backs: the twin's
@@ -124,7 +127,7 @@ class HemicubeAtlas:
         self.row_length = self.patch_count + 1  # the last column: backs of patches
 
         self.program = res.gpu.program("hemicube_item_buffer.vert", "hemicube_item_buffer.frag")
-        self.uniforms = {"near": 1e-3 * scene_diameter, "far": 4.0 * scene_diameter, "back_item": self.row_length}
+        self.uniforms = {"near": NEAR * scene_diameter, "far": 4.0 * scene_diameter, "back_item": self.row_length}
         vertices, indices = scene_geometry(patches)
         self.vertex_buffer = res.buffer(vertices.tobytes())
         self.index_buffer = res.buffer(indices.tobytes())

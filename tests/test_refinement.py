@@ -1,0 +1,75 @@
+"""Adaptive refinement (core/refinement.py) and the near field it exists for: an emitter a few
+millimetres from another surface (a light plane under a ceiling)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scenes import opposed_squares, surface
+
+from radiosity_addon.core import SolveSettings, scene_from_dict, solve, subdivide
+from radiosity_addon.core.refinement import GAP_RESOLUTION, facing_gaps, within_budget
+from radiosity_addon.core.scene import split_patches
+from radiosity_addon.core.scene.analysis import effects_for
+
+
+def light_under_ceiling(gap: float) -> dict:
+    """A 2 x 2 m floor and ceiling 2 m apart; a 0.4 m emitter `gap` under the ceiling, facing down,
+    two-sided (its back lights the ceiling, as Blender's emission does)."""
+    floor = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]
+    ceiling = [[x, y, 2.0] for x, y, _ in floor][::-1]
+    light = [[x, y, 2.0 - gap] for x, y in [[0.8, 0.8], [1.2, 0.8], [1.2, 1.2], [0.8, 1.2]]][::-1]
+    surfaces = [surface("floor", floor, 0.5, 0.0), surface("ceiling", ceiling, 0.7, 0.0),
+                surface("light", light, 0.8, 10.0)]
+    surfaces[2]["two_sided"] = True
+    return {"surfaces": surfaces}
+
+
+def test_facing_gaps_measure_the_distance_to_the_facing_plane():
+    scene = scene_from_dict(opposed_squares(0.01))
+    patches = subdivide(scene, 1, 0.5, np.zeros(len(scene), dtype=bool))
+    np.testing.assert_allclose(facing_gaps(patches, np.arange(len(patches))), [0.01, 0.01], rtol=1e-9)
+    far = subdivide(scene_from_dict(opposed_squares(3.0)), 1, 0.5, np.zeros(2, dtype=bool))
+    assert np.isinf(facing_gaps(far, np.arange(2))).all()  # beyond twice their size: no neighbour
+
+
+def test_refinement_resolves_the_gap_along_the_emitters_outline_only(gpu):
+    gap = 0.01
+    scene = scene_from_dict(light_under_ceiling(gap))
+    solution = solve(scene, SolveSettings(patch_size=0.5, elements=2, refinements=6, tolerance=1e-2), gpu=gpu)
+    patches = solution.patches
+    ceiling = (patches.surface == 1) & ~patches.is_back
+    size = np.sqrt(patches.area[ceiling])
+    assert size.min() <= GAP_RESOLUTION * gap * 1.5  # split down to about twice the gap ...
+    centre = patches.center[ceiling]
+    outline = np.abs(np.maximum(np.abs(centre[:, 0] - 1.0), np.abs(centre[:, 1] - 1.0)) - 0.2)
+    assert size[outline > 0.3].min() >= 0.25  # ... where the light changes, not far from it
+    uniform = (2.0 / size.min()) ** 2
+    assert ceiling.sum() < 0.1 * uniform  # far fewer patches than splitting everything that fine
+
+
+def test_refinement_keeps_within_a_patch_budget_counting_back_sides():
+    scene = scene_from_dict(light_under_ceiling(0.01))
+    backs = np.ones(len(scene), dtype=bool)
+    patches = subdivide(scene, 2, 0.5, backs)
+    wanted = np.zeros(len(patches), dtype=bool)
+    wanted[:6] = wanted[-2:] = True  # fronts and backs
+    for budget in (len(patches) + 7, len(patches) + 20, len(patches) + 100):
+        split = split_patches(patches, within_budget(patches, wanted, budget), backs)
+        assert len(split) <= budget
+    assert len(split_patches(patches, within_budget(patches, wanted, 10**6), backs)) > len(patches) + 20
+
+
+def test_hemicubes_see_an_emitter_four_millimetres_away_in_a_large_scene(gpu):
+    """A hemi-cube's near plane once sat at 1e-3 of the scene's diameter: here 5 mm, which clipped
+    the emitter 4 mm above the receiver away (the ceiling above a light plane got no light)."""
+    data = opposed_squares(0.004, receiver_reflectance=0.5, emitter_emission=1.0)
+    data["surfaces"].append(surface("far", [[5, 0, 0], [5, 0, 1], [5, 1, 1], [5, 1, 0]], 0.0, 0.0))
+    scene = scene_from_dict(data)
+    assert np.linalg.norm(scene.bounds[1] - scene.bounds[0]) > 5.0
+    solution = solve(scene, SolveSettings(method="hemicube", subdiv=4, hemicube_res=64, refinements=0,
+                                          skip_unneeded=False), gpu=gpu)
+    receiver = ~solution.patches.is_back & (solution.patches.surface == 0)
+    inner = receiver & (np.abs(solution.patches.center[:, :2] - 0.5).max(axis=1) < 0.3)
+    # F from an inner point to the square 4 mm above it is 0.98 or more: B = 0.5 F
+    assert solution.patch_radiosity[inner, 0].min() > 0.48
+    assert solution.patch_radiosity[receiver, 0].max() <= 0.5 + 1e-3  # and never more than all of it
