@@ -124,8 +124,8 @@ def test_room_bakes_with_the_addon_and_compares_with_cycles(tmp_path):
     path = tmp_path / "room.blend"
     rooms.save_room(path, 1000)
     bake_file(HeadlessBake(str(path), solve_options={"method": "hemicube", "patch_size": 1.0, "subdiv": None,
-                                                     "hemicube_res": 16},
-                           lightmap_options={"texel_density": 8.0}, output_dir=str(tmp_path / "maps")))
+                                                     "hemicube_res": 16, "refinements": 0},
+                           lightmap_options={"texel_density": 8.0, "content": "combined"}, output_dir=str(tmp_path / "maps")))
     names = list(rooms.build_room(1000)["triangles_per_object"])
     ours = blend_lightmaps.read_lightmaps(tmp_path / "maps", names)
     reference = blend_reference.cycles_lightmaps(path, blend_lightmaps.sizes_of(ours), "combined", samples=4)
