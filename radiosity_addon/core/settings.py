@@ -19,7 +19,7 @@ QUALITIES = ("draft", "good", "final")
 # costs and reaches (README, "What accuracy costs"). Tolerances per method: progressive, the
 # unshot power left relative to the emitted; hemi-cube, the change per sweep relative to max B.
 QUALITY_PRESETS = {
-    "draft": {"solve": {"patch_size": 1.0, "elements": 2, "refinements": 3, "visibility_res": 256,
+    "draft": {"solve": {"patch_size": 1.0, "elements": 2, "refinements": 5, "visibility_res": 256,
                         "hemicube_res": 64, "hemicube_elements": 1},
               "tolerance": {"progressive": 1e-2, "hemicube": 1e-3},
               "lightmaps": {"direct_map_resolution": 512}},
