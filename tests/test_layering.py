@@ -171,3 +171,14 @@ def test_the_checks_see_a_violation():
     assert "radiosity_addon.core.gpu" in GRAPH["radiosity_addon.core.visibility.hemisphere"]
     assert "radiosity_addon.core.scene" in GRAPH["radiosity_addon.core.shooting.lamps"]
     assert any(t.startswith("bpy") for t in GRAPH["radiosity_addon.blender.apply"])
+
+
+def test_no_test_imports_the_tools():
+    """tools/ are scripts for people (samples, measurements), not a library the tests lean on."""
+    bad = []
+    for path in (ROOT / "tests").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            bad += [f"{path.relative_to(ROOT)} imports {n}" for n in names if n == "tools" or n.startswith("tools.")]
+    assert not bad, "; ".join(bad)
