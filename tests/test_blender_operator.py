@@ -205,3 +205,18 @@ def test_mirrored_objects_keep_their_fronts_and_visible_lamps_are_exported():
         from radiosity_addon.blender.bake import rollback
 
         rollback(plan)
+
+
+def test_baked_objects_get_no_warning_for_inputs_cycles_bakes_but_occluders_do():
+    """textured sample: the floor's Base Color is an image. Baked, Cycles bakes its albedo per
+    texel (nothing is guessed, nothing to warn of); as an occluder it is read as the image's
+    average, and the export says so."""
+    from radiosity_addon.blender.export import export_scene
+
+    context = support.open_blend(support.SAMPLES / "textured.blend")
+    floor = bpy.data.objects["Floor"]
+    others = [obj for obj in context.view_layer.objects if obj.type == "MESH" and obj is not floor]
+    baked = export_scene(context.evaluated_depsgraph_get(), [floor], []).warnings
+    occluding = export_scene(context.evaluated_depsgraph_get(), others[:1], [floor]).warnings
+    assert not [w for w in baked if "average colour" in w or "driven by" in w], baked
+    assert any("average colour" in w for w in occluding), occluding

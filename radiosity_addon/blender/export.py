@@ -196,8 +196,10 @@ def export_scene(depsgraph, baked, occluders=None, lamps=(), world=None) -> Expo
     renders, instances included (`add_occluders`). `lamps` (light objects, see
     `lights.render_lamps`) and `world` go into the scene's extras as "lights" and "world"."""
     exporter = MeshExporter()
+    exporter.materials = MaterialReader(cycles_bakes_inputs=True)  # the bake replaces their guesses
     for obj in baked:
         exporter.add(obj, obj.evaluated_get(depsgraph), with_lightmap_uv=True)
+    baked_reader, exporter.materials = exporter.materials, MaterialReader()  # occluders keep what is read
     if occluders is None:
         add_occluders(exporter, depsgraph, baked)
     else:
@@ -208,4 +210,5 @@ def export_scene(depsgraph, baked, occluders=None, lamps=(), world=None) -> Expo
     extras, light_warnings = export_lights(depsgraph, lamps, world)
     scene = exporter.scene(extras)
     return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked], instances=exporter.instances,
-                         warnings=exporter.materials.warnings + exporter.warnings + light_warnings)
+                         warnings=baked_reader.warnings + exporter.materials.warnings + exporter.warnings
+                         + light_warnings)

@@ -36,16 +36,16 @@ class Values:
         if source.bl_idname == "ShaderNodeTexImage" and source.image is not None:
             average = try_image_average(source.image)
             if average is not None:
-                self.reader.warn(self.material, f"texture '{source.image.name}' on '{socket.name}' baked as its"
-                                                " average colour")
+                self.reader.warn_read(self.material, f"texture '{source.image.name}' on '{socket.name}' baked as"
+                                                     " its average colour")
                 return average
-        self.reader.warn(self.material, f"'{socket.name}' is driven by '{source.name}'; baked with its unlinked"
-                                        " value")
+        self.reader.warn_read(self.material, f"'{socket.name}' is driven by '{source.name}'; baked with its"
+                                             " unlinked value")
         return np.array(socket.default_value[:3], dtype=np.float64)
 
     def scalar(self, socket):
         if socket.is_linked:
-            self.reader.warn(self.material, f"'{socket.name}' is driven by a node; baked with its unlinked value")
+            self.reader.warn_read(self.material, f"'{socket.name}' is driven by a node; baked with its unlinked value")
         return float(socket.default_value)
 
     def diffuse_factor(self, node):
@@ -75,9 +75,17 @@ class Values:
 class MaterialReader:
     """Reads and caches each material's colours; collects one warning per material and fault."""
 
-    def __init__(self):
+    def __init__(self, cycles_bakes_inputs: bool = False):
         self.cache: dict = {}
         self.warnings: list[str] = []
+        # the objects read are baked by Cycles (material_bake): what this reading guesses about
+        # linked inputs is replaced by Cycles' own values, so saying it would mislead
+        self.cycles_bakes_inputs = cycles_bakes_inputs
+
+    def warn_read(self, material, text: str) -> None:
+        """A warning about an input this reading could only guess."""
+        if not self.cycles_bakes_inputs:
+            self.warn(material, text)
 
     def warn(self, material, text: str) -> None:
         line = f"material '{material.name}': {text}"
