@@ -62,7 +62,7 @@ void main() {
                                 corner[4 * p + 3].xyz, s, t);
         vec3 n = normal_area[p].xyz;
         vec3 rho = reflectance[p].rgb;
-        int plane = plane_of[p];
+        int plane = plane_of[p].id.x;
         float share = weight * normal_area[p].w / float(per_patch);  // the element's area
 #if RECORD_VISIBILITY
         visibility_out[e] = 0.0;

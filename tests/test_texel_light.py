@@ -71,3 +71,65 @@ def test_a_suns_shadow_is_as_sharp_as_the_lightmap(gpu):
     assert np.all(np.abs(direct[clear & ~shadowed] - lit_value) < 0.05 * lit_value + 0.05)
     assert light[clear & shadowed].max() < 0.1 * lit_value
     assert (clear & shadowed).sum() > 200
+
+
+def occluded_emitter_light(points, emitter_corners, emission, box_low, box_high, samples=48):
+    """E ∫ cos cos / (π r²) V dA over a downward-facing square emitter, V by ray casting against an
+    axis-aligned box (midpoint rule, samples² points): the independent reference."""
+    c = np.asarray(emitter_corners, dtype=float)
+    s = (np.arange(samples) + 0.5) / samples
+    u, v = np.meshgrid(s, s, indexing="ij")
+    on = (c[0] + (c[3] - c[0]) * u.reshape(-1, 1) + (c[1] - c[0]) * v.reshape(-1, 1))  # (N, 3)
+    area = np.linalg.norm(np.cross(c[3] - c[0], c[1] - c[0])) / len(on)
+    light = np.zeros(len(points))
+    for start in range(0, len(points), 256):
+        p = points[start:start + 256, None, :]  # (n, 1, 3)
+        d = on[None] - p  # to the emitter
+        r2 = (d ** 2).sum(axis=-1)
+        cosines = d[..., 2] ** 2 / r2  # floor normal +z, emitter normal -z: both d_z / r
+        with np.errstate(divide="ignore", invalid="ignore"):  # slab test of the segment against the box
+            t0, t1 = (box_low - p) / d, (box_high - p) / d
+        enter = np.nanmax(np.minimum(t0, t1), axis=-1)
+        leave = np.nanmin(np.maximum(t0, t1), axis=-1)
+        hidden = (enter < leave) & (leave > 1e-9) & (enter < 1.0)
+        light[start:start + 256] = emission * (cosines / (np.pi * r2) * ~hidden).sum(axis=1) * area
+    return light
+
+
+@pytest.mark.parametrize("method", ["progressive", "hemicube"])
+def test_no_light_leaks_under_a_box_and_its_penumbra_is_texel_sharp(gpu, method):
+    """A black 0.4 m box standing on the floor under a 0.5 m emitter: the floor under the box gets
+    nothing, and every texel around it — the contact line, the penumbra — matches a ray-cast
+    reference (the floor's one 2 m patch could not show any of it)."""
+    low, high = np.array([0.8, 0.8, 0.0]), np.array([1.2, 1.2, 0.4])
+    x0, y0, z0 = low
+    x1, y1, z1 = high
+    faces = {"top": [[x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]],
+             "bottom": [[x0, y0, z0], [x0, y1, z0], [x1, y1, z0], [x1, y0, z0]],
+             "south": [[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1]],
+             "north": [[x1, y1, z0], [x0, y1, z0], [x0, y1, z1], [x1, y1, z1]],
+             "west": [[x0, y1, z0], [x0, y0, z0], [x0, y0, z1], [x0, y1, z1]],
+             "east": [[x1, y0, z0], [x1, y1, z0], [x1, y1, z1], [x1, y0, z1]]}
+    emitter_corners = [[0.75, 0.75, 1.5], [0.75, 1.25, 1.5], [1.25, 1.25, 1.5], [1.25, 0.75, 1.5]]
+    surfaces = ([{**surface("floor", FLOOR, 0.5, 0.0), "uv": UV}]
+                + [surface(f"box {name}", corners, 0.0, 0.0, obj="box") for name, corners in faces.items()]
+                + [surface("emitter", emitter_corners, 0.0, 10.0)])
+    scene = scene_from_dict({"surfaces": surfaces})
+    solution = solve(scene, SolveSettings(method=method, subdiv=1, elements=2, hemicube_res=64, refinements=0),
+                     gpu=gpu)
+    lightmap = bake_lightmaps(scene, solution, LightmapSettings(texel_density=64), gpu=gpu)["floor"]
+    inside = lightmap.patch_index >= 0
+    points = texel_centres(lightmap.size, FLOOR)[inside]
+    measured = lightmap.rgba[inside][:, 0]
+    exact = occluded_emitter_light(points, emitter_corners, 10.0, low, high)
+    from_box = np.maximum(np.abs(points[:, 0] - 1.0), np.abs(points[:, 1] - 1.0)) - 0.2  # > 0 outside it
+    under = from_box < -1.0 / 64
+    contact = (from_box > 0) & (from_box < 0.05)
+    assert under.sum() > 300 and contact.sum() > 300
+    assert measured[under].max() <= 1e-3 * exact.max()  # nothing leaks under the box
+    # the contact line and the penumbra, texel by texel (one texel's width of a sharp edge aside)
+    assert exact[contact].mean() < 0.8 * exact[from_box > 0.5].mean()  # the box does shade its foot
+    np.testing.assert_allclose(measured[contact].mean(), exact[contact].mean(), rtol=0.03)
+    outside = from_box > 1.5 / 64
+    relative_rms = np.sqrt(((measured - exact)[outside] ** 2).mean() / (exact[outside] ** 2).mean())
+    assert relative_rms < 0.02

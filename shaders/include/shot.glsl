@@ -15,6 +15,13 @@
 //
 // Defines: MAX_SHOTS, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN (the map's guard), OCCLUSION.
 
+// HIDE_BEHIND_OCCLUDERS (the texel pass): a receiver behind the patch its pixel shows is hidden,
+// never searched past (the element pass keeps the search: its receivers are patch-sized anyway)
+#ifndef HIDE_BEHIND_OCCLUDERS
+#define HIDE_BEHIND_OCCLUDERS 0
+#endif
+const float HIDING_MARGIN = 1e-3;  // of the eye-receiver distance: a plane nearer than that hides
+
 struct Shot {
     vec4 eye_area;        // the visibility eye, the polygon's area
     vec4 axis_x_kind;     // the eye's frame: x, and the kind
@@ -27,7 +34,9 @@ struct Shot {
 };
 
 layout(std140, binding = UNIFORM_SHOTS) uniform Shots { Shot shots[MAX_SHOTS]; };
-layout(std430, binding = STORAGE_PATCH_PLANE) readonly buffer Plane { int plane_of[]; };
+// per patch: its plane's equation (n, n . x), the id of that plane (a surface side), its corners
+struct PatchPlane { vec4 equation; ivec4 id; vec4 corner[4]; };
+layout(std430, binding = STORAGE_PATCH_PLANE) readonly buffer Plane { PatchPlane plane_of[]; };
 layout(binding = TEXTURE_HEMICUBES) uniform usampler2D hemicubes;
 layout(binding = TEXTURE_ITEM_BUFFER) uniform usampler2D item_buffer;
 layout(binding = TEXTURE_DISTANCE_MAP) uniform sampler2D distance_map;  // distance of what each map texel shows (0: nothing)
@@ -38,13 +47,43 @@ uniform int hemicube_tiles_per_row;
 uniform int item_resolution;
 
 bool on_plane(uint item, int plane) {
-    return item != 0u && int(item) - 1 < plane_of.length() && plane_of[int(item) - 1] == plane;
+    return item != 0u && int(item) - 1 < plane_of.length() && plane_of[int(item) - 1].id.x == plane;
+}
+
+// Does the patch `item` (seen where the receiver should be) lie between the eye and the receiver
+// (eye + d) along that ray? Then the receiver is hidden and no search may look past it: searching
+// neighbour pixels would find the floor beside a box's foot and light the floor in its shadow.
+bool hides(uint item, vec3 eye, vec3 d) {
+    if (item == 0u || int(item) - 1 >= plane_of.length()) {
+        return false;  // the sky, or a patch's back column: a rasterization gap, search
+    }
+    vec4 equation = plane_of[int(item) - 1].equation;
+    float along = dot(equation.xyz, d);
+    if (abs(along) < 1e-12 * dot(d, d)) {
+        return false;
+    }
+    float t = (equation.w - dot(equation.xyz, eye)) / along;
+    if (!(t > 1e-4 && t < 1.0 - HIDING_MARGIN)) {
+        return false;
+    }
+    // and the exact ray passes through that patch (not just its plane): at a silhouette the pixel
+    // may show an occluder the ray itself misses, and then the search decides
+    vec3 hit = eye + t * d;
+    float slack = -1e-4 * length(t * d);
+    for (int i = 0; i < 4; ++i) {
+        vec3 a = plane_of[int(item) - 1].corner[i].xyz;
+        vec3 b = plane_of[int(item) - 1].corner[(i + 1) % 4].xyz;
+        if (distance(a, b) > 0.0 && dot(cross(b - a, hit - a), equation.xyz) < slack * distance(a, b)) {
+            return false;
+        }
+    }
+    return true;
 }
 
 // Is the receiver's plane seen in direction q (the eye's frame: x, y, pole; q.z > 0) in hemi-cube
 // `slot`? The tile is laid out as visibility.hemicube.face_instances lays out the five faces: top
 // rows [0, R), then the +x, -x, +y, -y half faces of R/2 rows each. The search stays in one face.
-bool hemicube_sees(int slot, vec3 q, int plane) {
+bool hemicube_sees(int slot, vec3 q, int plane, vec3 eye, vec3 d) {
     int r = hemicube_resolution;
     vec3 aq = abs(q);
     float a, b, c, up_min;
@@ -69,9 +108,15 @@ bool hemicube_sees(int slot, vec3 q, int plane) {
     ivec2 origin = ivec2(slot % hemicube_tiles_per_row, slot / hemicube_tiles_per_row) * ivec2(r, 3 * r)
                  + ivec2(0, row0);
     pixel = clamp(pixel, ivec2(0), ivec2(r - 1, rows - 1));
-    if (on_plane(texelFetch(hemicubes, origin + pixel, 0).r, plane)) {
+    uint seen = texelFetch(hemicubes, origin + pixel, 0).r;
+    if (on_plane(seen, plane)) {
         return true;  // most receivers: no search
     }
+#if HIDE_BEHIND_OCCLUDERS
+    if (hides(seen, eye, d)) {
+        return false;  // something in front of it: hidden
+    }
+#endif
     bool found = false;
     for (int dy = -SEARCH_RADIUS; dy <= SEARCH_RADIUS; ++dy) {
         for (int dx = -SEARCH_RADIUS; dx <= SEARCH_RADIUS; ++dx) {
@@ -123,7 +168,7 @@ bool shot_sees(int k, vec3 x, vec3 n, int plane) {
     return true;
 #endif
     int slot = int(shots[k].extra.y);
-    return slot >= 0 ? hemicube_sees(slot, q, plane) : map_sees(q, plane, shots[k].extra.z);
+    return slot >= 0 ? hemicube_sees(slot, q, plane, shots[k].eye_area.xyz, d) : map_sees(q, plane, shots[k].extra.z);
 }
 
 // F times V of shot k at x; `sky` is the receiver's sky fraction (kind 3: its visibility is in it).

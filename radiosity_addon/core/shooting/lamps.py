@@ -11,7 +11,7 @@ from ..scene import Lamp
 from ..scene.geometry import bilinear, polygon_area_vector, tangent_frame
 from .shooters import DIRECTIONAL, POINT_LAMP, POLYGON, Shooter
 
-AREA_LAMP_PIECE = 1 / 32  # longest side of an area lamp's pieces, as a fraction of the scene's size
+AREA_LAMP_PIECE = 1 / 64  # longest side of an area lamp's or emitter's pieces, as a fraction of the scene's size
 AREA_LAMP_MAX_SPLIT = 8  # pieces per side at most
 
 

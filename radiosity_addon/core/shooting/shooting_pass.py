@@ -15,7 +15,7 @@ from ..gpu import SHOT_ENERGY_ONE, Resources, image_unit, storage, work_groups
 from ..scene import Patches
 from .elements import ElementTextures
 from .shooters import SKY, Shooter
-from .shots import MAX_SHOTS, ShotVisibility
+from .shots import MAX_SHOTS, ShotVisibility, patch_planes
 
 MAX_GROUPS = 65535  # work groups per dispatch dimension guaranteed by OpenGL
 
@@ -44,8 +44,7 @@ class PatchBuffers:
             "PATCH_REFLECTANCE": res.buffer(pad(patches.reflectance, np.zeros((len(patches), 1))).tobytes()),
             "ELEMENT_WEIGHTS": res.buffer(textures.weights.astype(np.float32).tobytes()),
             "SHOT_ENERGY": res.buffer(reserve=16 * MAX_SHOTS),  # per shot: hit, reflected RGB
-            # patches of one side of a surface are coplanar: the visibility lookup accepts any of them
-            "PATCH_PLANE": res.buffer(patches.plane.astype(np.int32).tobytes()),
+            "PATCH_PLANE": res.buffer(patch_planes(patches)),
         }
         self.buffers["SHOT_ENERGY"].clear()
 

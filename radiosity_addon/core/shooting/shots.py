@@ -38,6 +38,19 @@ def shot_records(shooters: list[Shooter], slots: list[int]) -> np.ndarray:
     return records
 
 
+def patch_planes(patches: Patches) -> bytes:
+    """shot.glsl's PatchPlane per patch: its plane's equation (n, n . x) as float32, its plane id
+    (patches of one side of a surface are coplanar: a visibility lookup accepts any of them), its
+    four corners (a triangle repeats its last)."""
+    equation = np.concatenate([patches.normal, np.einsum("pd,pd->p", patches.normal, patches.center)[:, None]],
+                              axis=1).astype(np.float32)
+    ids = np.zeros((len(patches), 4), dtype=np.int32)
+    ids[:, 0] = patches.plane
+    corners = np.concatenate([patches.corners, np.zeros((len(patches), 4, 1))], axis=2).astype(np.float32)
+    return np.concatenate([equation.view(np.int32), ids, corners.reshape(len(patches), 16).view(np.int32)],
+                          axis=1).tobytes()
+
+
 def hemicube_resolution(visibility_res: int) -> int:
     """A hemi-cube's top face for a visibility resolution: its unfolded cross (2 R) spans as many
     pixels as a hemispherical map across."""

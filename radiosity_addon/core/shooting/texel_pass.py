@@ -11,7 +11,7 @@ from ..gpu import Resources, storage
 from ..scene import Patches
 from .shooters import Shooter
 from .shooting_pass import dispatch, set_uniforms
-from .shots import ShotVisibility
+from .shots import ShotVisibility, patch_planes
 
 
 class TexelReceivers:
@@ -27,11 +27,11 @@ class TexelReceivers:
             "TEXEL_NORMAL": res.buffer(vec4(normals).tobytes()),
             "TEXEL_PLANE": res.buffer(np.asarray(planes, dtype=np.int32).tobytes()),
             "TEXEL_LIGHT": res.buffer(np.zeros((self.count, 4), dtype=np.float32).tobytes()),
-            "PATCH_PLANE": res.buffer(patches.plane.astype(np.int32).tobytes()),
+            "PATCH_PLANE": res.buffer(patch_planes(patches)),
         }
         self.visibility = visibility
         self.program = res.gpu.compute("shoot_to_texels.comp", defines={
-            "KERNEL_EXACT": int(kernel == "exact"), **visibility.defines})
+            "KERNEL_EXACT": int(kernel == "exact"), "HIDE_BEHIND_OCCLUDERS": 1, **visibility.defines})
 
     def shoot(self, shooters: list[Shooter]) -> None:
         """One batch (see `ShotVisibility.batches`)."""

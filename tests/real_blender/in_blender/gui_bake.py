@@ -277,6 +277,9 @@ def case_quit():
 def steps():
     results["blender"] = bpy.app.version_string
     bpy.context.preferences.use_preferences_save = False  # the disable case must not outlive the session
+    # these cases watch a progressive bake (its live preview, its progress, Esc mid-way); auto picks
+    # the hemi-cube method for the Cornell sample, which has no preview and ends in seconds
+    bpy.context.scene.radiosity.method = "progressive"
     shared["opened"] = rig.file_state()
     rig.open_panel_first()
     rig.show_reports()
