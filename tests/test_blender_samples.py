@@ -156,6 +156,9 @@ def compared(sample: str, content: str) -> Comparison:
     sizes = blend_lightmaps.sizes_of(ours)
     positions, _ = blend_lightmaps.texel_geometry(sizes)
     hidden = in_contact(sizes)
+    # read from the file now: Cycles' reference reopens it, and these objects go with the old one
+    extents = {obj.name: world_rectangle(obj.name) for obj in objects}
+    instances = [tuple(obj.matrix_world.translation) for obj in bpy.data.objects if obj.instance_type == "COLLECTION"]
     baked = time.perf_counter()
     prune_cache()
     reference = blend_reference.reference_with_noise(path, sizes, content, SAMPLES, cache_dir=CACHE)
@@ -163,9 +166,7 @@ def compared(sample: str, content: str) -> Comparison:
     return Comparison(ours=ours, reference=reference["images"], noise=reference["noise"], texels=texels,
                       positions=positions, report=plan.report,
                       seconds={"ours": baked - started, "cycles": time.perf_counter() - baked},
-                      extents={obj.name: world_rectangle(obj.name) for obj in objects},
-                      instances=[tuple(obj.matrix_world.translation) for obj in bpy.data.objects
-                                 if obj.instance_type == "COLLECTION"])
+                      extents=extents, instances=instances)
 
 
 def cases(known: dict):
