@@ -59,7 +59,7 @@ class Report:
                 "interreflection" if effects.interreflection else "direct light only",
                 f"{effects.emitters} emitter(s)"]
         if effects.back_sides or effects.back_sides_skipped:
-            said.append(f"{effects.back_sides} back side(s), {effects.back_sides_skipped} skipped")
+            said += [f"{effects.back_sides} back side(s)", f"{effects.back_sides_skipped} skipped"]
         said.append(f"{self.shots} shots" if self.shots is not None else f"{work.hemicubes} hemi-cubes")
         if "total" in self.timings:
             said.append(f"{self.timings['total']:.1f} s")

@@ -44,7 +44,11 @@ def watch_status_text() -> None:
 
 
 def invoke_bake() -> set:
-    """As the Bake button does: in the Properties editor, allowed to push an undo step."""
+    """As the Bake button does: in the Properties editor, allowed to push an undo step. Every case
+    watches a progressive bake (its live preview, its progress, Esc mid-way); auto would pick the
+    hemi-cube method for the Cornell sample (no preview, done in seconds). Set at each bake: an
+    undo takes the file back to before any setting made from Python."""
+    bpy.context.scene.radiosity.method = "progressive"
     with rig.override("PROPERTIES"):
         return bpy.ops.radiosity.bake("INVOKE_DEFAULT", True)
 
@@ -277,9 +281,6 @@ def case_quit():
 def steps():
     results["blender"] = bpy.app.version_string
     bpy.context.preferences.use_preferences_save = False  # the disable case must not outlive the session
-    # these cases watch a progressive bake (its live preview, its progress, Esc mid-way); auto picks
-    # the hemi-cube method for the Cornell sample, which has no preview and ends in seconds
-    bpy.context.scene.radiosity.method = "progressive"
     shared["opened"] = rig.file_state()
     rig.open_panel_first()
     rig.show_reports()
