@@ -63,5 +63,5 @@ def test_the_readmes_headless_bake_lights_every_object(blender):
     # emitter's back 5 mm below it (emission is two-sided; measured 1.86 against the floor's 0.19)
     assert max(mean["ceiling"]) == max(max(m) for m in mean.values())
     assert max(mean["ceiling"]) > 5 * max(mean["floor"])
-    assert mean["left_wall"][0] > 2 * mean["left_wall"][1] and mean["right_wall"][1] > 2 * mean["right_wall"][0]
+    # (a "light" lightmap holds the light arriving, not the wall's colour: the red wall's is not red)
     assert found["last_bake"].startswith("3 channel(s) · occlusion · interreflection · 1 emitter(s)")
