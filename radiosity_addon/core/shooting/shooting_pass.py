@@ -15,7 +15,7 @@ from ..gpu import SHOT_ENERGY_ONE, Resources, image_unit, storage, work_groups
 from ..scene import Patches
 from .elements import ElementTextures
 from .shooters import SKY, Shooter
-from .shots import MAX_SHOTS, ShotVisibility, patch_planes
+from .shots import MAX_SHOTS, ShotVisibility, patch_planes, shoot_in_batches
 
 MAX_GROUPS = 65535  # work groups per dispatch dimension guaranteed by OpenGL
 
@@ -92,10 +92,7 @@ class ShootingPass:
 
     def shoot_all(self, shooters: list[Shooter]) -> int:
         """Every shooter, in batches; returns the batches."""
-        batches = self.visibility_source.batches(shooters)
-        for batch in batches:
-            self.shoot(batch)
-        return len(batches)
+        return shoot_in_batches(self.shoot, self.visibility_source, shooters)
 
     def read_energy(self, count: int) -> np.ndarray:
         """(count, 4) float64 per shot of the last batches since the previous read: the hit fraction

@@ -51,6 +51,14 @@ def patch_planes(patches: Patches) -> bytes:
                           axis=1).tobytes()
 
 
+def shoot_in_batches(shoot, visibility: "ShotVisibility", shooters: list[Shooter]) -> int:
+    """`shoot(batch)` for every batch `visibility` makes of `shooters`; returns the batches."""
+    batches = visibility.batches(shooters)
+    for batch in batches:
+        shoot(batch)
+    return len(batches)
+
+
 def hemicube_resolution(visibility_res: int) -> int:
     """A hemi-cube's top face for a visibility resolution: its unfolded cross (2 R) spans as many
     pixels as a hemispherical map across."""

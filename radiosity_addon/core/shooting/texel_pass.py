@@ -11,7 +11,7 @@ from ..gpu import Resources, storage
 from ..scene import Patches
 from .shooters import Shooter
 from .shooting_pass import dispatch, set_uniforms
-from .shots import ShotVisibility, patch_planes
+from .shots import ShotVisibility, patch_planes, shoot_in_batches
 
 
 class TexelReceivers:
@@ -45,10 +45,7 @@ class TexelReceivers:
 
     def shoot_all(self, shooters: list[Shooter]) -> int:
         """Every shooter, in batches; returns the batches."""
-        batches = self.visibility.batches(shooters)
-        for batch in batches:
-            self.shoot(batch)
-        return len(batches)
+        return shoot_in_batches(self.shoot, self.visibility, shooters)
 
     def read_light(self) -> np.ndarray:
         """(N, 3) float64 light H gathered by each point."""
