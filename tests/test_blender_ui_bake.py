@@ -78,7 +78,7 @@ class ButtonBake:
         self.result = operators.RADIOSITY_OT_bake.modal(self.operator, self.ui, event)
         return self.result
 
-    def run_until(self, condition=lambda: False, timeout=120.0):
+    def run_until(self, condition=lambda: False, timeout=300.0):
         deadline = time.monotonic() + timeout
         while self.result == {"RUNNING_MODAL"} and not condition():
             assert time.monotonic() < deadline, "the bake never got there"

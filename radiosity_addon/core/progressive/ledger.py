@@ -3,6 +3,7 @@ previews, and the estimate of the time left."""
 
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -68,11 +69,16 @@ def ambient_term(patches: Patches):
 
 
 def time_left(history, tolerance: float):
-    """Seconds to reach the tolerance, from the recent rate of decrease of log(unshot)."""
+    """Seconds to reach the tolerance, from the rate of decrease of log(unshot) over the last half
+    of the time solved so far. The rate falls as the solve goes (the first shots carry most of the
+    energy), so a window of the last few shots, early on all of them fast, promises far too little:
+    measured on the Cornell box it said a third of the real total at a fifth of the way, where the
+    last half's rate is within 10 % from a fifth of the way on."""
     if len(history) < 4:
         return None
-    recent = history[max(0, len(history) - 50):]
-    (t0, u0), (t1, u1) = recent[0], recent[-1]
+    t1, u1 = history[-1]
+    halfway = bisect.bisect_right(history, 0.5 * t1, key=lambda entry: entry[0])  # times increase
+    t0, u0 = history[max(halfway - 1, 0)]
     if t1 <= t0 or u1 <= 0 or u0 <= u1:
         return None
     rate = (math.log(u0) - math.log(u1)) / (t1 - t0)
