@@ -37,7 +37,7 @@ SOLVER_OPTIONS = [
     ("--solver", "solver", {"choices": SOLVERS}, "linear solver of the hemi-cube method"),
     ("--tolerance", "tolerance", {"type": float, "metavar": "T"},
      "hemicube: max change relative to max B; progressive: unshot power relative to emitted power"
-     " (not given: the quality's, 1e-5 and 1e-3 for good)"),
+     " (not given: the quality's, 1e-5 and 1e-2 for good)"),
     ("--max-iterations", "max_iterations", {"type": int}, "iteration cap of the linear solvers"),
     ("--max-shots", "max_shots", {"type": int}, "shot budget of the progressive method"),
     ("--visibility", "visibility", {"choices": VISIBILITY_VARIANTS},
@@ -47,6 +47,8 @@ SOLVER_OPTIONS = [
      "pixels across the progressive visibility map"),
     ("--shoot-from", "shoot_from", {"choices": SHOOTING_POINTS},
      "progressive: render each shooter's visibility map from the centroid of its unshot power or its centre"),
+    ("--complete-remainder", "complete_remainder", {"action": argparse.BooleanOptionalAction},
+     "progressive: add the light the power still unshot at the stop would deliver"),
     ("--kernel", "kernel", {"choices": KERNELS},
      "progressive form-factor kernel: exact point-to-polygon or the disk approximation"),
 ]

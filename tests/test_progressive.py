@@ -348,3 +348,25 @@ def test_the_estimate_of_time_left_holds_from_a_quarter_of_the_solve_on(gpu):
                  for k, (shots, _) in enumerate(history) if shots >= 0.25 * total and k >= 3]
     assert len(predicted) > 10
     assert all(abs(ratio - 1) < 0.1 for _, ratio in predicted), predicted
+
+
+def test_the_remainders_completion_halves_the_error_of_a_loose_tolerance(gpu):
+    """Stopped at 10⁻² unshot, the Cornell box's per-surface means (luminance) are within 1.5 % of a
+    solve to 10⁻⁵ once the remainder is completed (measured −0.6…+1.2 %), against −2.9…0 % without
+    completion: it takes the solve most of the way at no cost in shots."""
+    from scenes import area_weighted_mean
+
+    scene = load_scene("cornell-box")
+
+    def means(**settings):
+        solution = solve(scene, SolveSettings(subdiv=4, elements=2, refinements=0, **settings), gpu=gpu)
+        return np.array([area_weighted_mean(solution, i).sum() for i in range(len(scene))]), solution
+
+    converged, _ = means(tolerance=1e-5, complete_remainder=False)
+    completed, solution = means(tolerance=1e-2)
+    plain, _ = means(tolerance=1e-2, complete_remainder=False)
+    completed_error, plain_error = completed / converged - 1, plain / converged - 1
+    assert np.abs(completed_error).max() < 0.015, completed_error
+    assert plain_error.min() < -0.02 and np.all(plain_error < 1e-3), plain_error  # short everywhere without
+    assert np.abs(completed_error).max() < 0.6 * np.abs(plain_error).max()
+    assert sum(solution.report.details.energy["remainder_delivered"]) > 0

@@ -231,15 +231,16 @@ def progressive(**overrides) -> SolveSettings:
 
 def test_progressive_closed_box_high_reflectance_stops_at_budget_from_below(gpu):
     """ρ = 0.99 needs ~100× the emitted power shot; at a shot budget the answer must be below the
-    exact one by what is still unshot (never above, never NaN), and the float64 ledger must balance."""
+    exact one by what is still unshot (never above, never NaN), and the float64 ledger must balance.
+    The remainder's completion (the default) then adds what that unshot power would deliver."""
     reflectance = 0.99
     scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
-    solution = solve(scene, progressive(max_shots=240), gpu=gpu)
+    solution = solve(scene, progressive(max_shots=240, complete_remainder=False), gpu=gpu)
     assert solution.report.details.stop_reason == "max_shots"
     assert_physical(solution)
     exact = 1.0 / (1 - reflectance)
     radiosity = solution.patch_radiosity
-    assert np.all(radiosity <= exact * 1.001)
+    assert np.all(radiosity <= exact * 1.001) and radiosity.mean() < 0.8 * exact
     energy = solution.report.details.energy
     booked = energy["absorbed"] + energy["escaped"] + energy["unshot"]
     assert abs(energy["emitted"] + energy["surplus"] - booked) < 1e-9 * energy["emitted"]
@@ -249,6 +250,10 @@ def test_progressive_closed_box_high_reflectance_stops_at_budget_from_below(gpu)
     unshot_radiosity = energy["unshot"] / 3 / solution.patches.area.sum()
     completed = radiosity.mean() + unshot_radiosity * reflectance / (1 - reflectance)
     assert completed == pytest.approx(exact, rel=0.01)  # measured 5e-6
+    # the solve's own completion, from the hit and reflected fractions its shots measured
+    own = solve(scene, progressive(max_shots=240), gpu=gpu)
+    assert own.patch_radiosity.mean() == pytest.approx(exact, rel=0.01)
+    assert np.all(own.patch_radiosity <= exact * 1.01)
 
 
 @pytest.fixture(scope="module")

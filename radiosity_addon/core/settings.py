@@ -21,15 +21,15 @@ QUALITIES = ("draft", "good", "final")
 QUALITY_PRESETS = {
     "draft": {"solve": {"patch_size": 1.0, "elements": 2, "refinements": 5, "visibility_res": 256,
                         "hemicube_res": 64, "hemicube_elements": 1},
-              "tolerance": {"progressive": 1e-2, "hemicube": 1e-3},
+              "tolerance": {"progressive": 3e-2, "hemicube": 1e-3},
               "lightmaps": {"direct_map_resolution": 512}},
     "good": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
                        "hemicube_res": 128, "hemicube_elements": 2},
-             "tolerance": {"progressive": 1e-3, "hemicube": 1e-5},
+             "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
              "lightmaps": {"direct_map_resolution": 1024}},
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 6, "visibility_res": 1024,
                         "hemicube_res": 256, "hemicube_elements": 2},
-              "tolerance": {"progressive": 5e-4, "hemicube": 1e-5},
+              "tolerance": {"progressive": 3e-3, "hemicube": 1e-5},
               "lightmaps": {"direct_map_resolution": 2048}},
 }
 DEFAULT_TOLERANCE = QUALITY_PRESETS["good"]["tolerance"]
@@ -60,6 +60,7 @@ class SolveSettings:
     kernel: str = "exact"  # progressive: exact | disk
     visibility_res: int = 512  # progressive: pixels across a visibility map (a hemi-cube's unfolded cross)
     batch_shots: int = 32  # progressive: shooters per pass at most (hemi-cube visibility)
+    complete_remainder: bool = True  # progressive: the light the power unshot at the stop would deliver, added (laid out like the last shots')
     shoot_from: str = "centroid"  # progressive: visibility map from the unshot power's centroid | centre
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
     skip_unneeded: bool = True  # simulate only the effects the scene calls for (scene.analysis)

@@ -28,6 +28,10 @@ class EnergyLedger:
         self.escaped = np.zeros(3)
         self.surplus = np.zeros(3)
         self.pending = None  # power of the shot whose fractions are not yet read back
+        self.pending_bounce = False  # whether those shots send reflected light (not emitters' own)
+        self.bounce_shot = np.zeros(3)  # what reflected-light shots sent, and of it what hit and was reflected
+        self.bounce_hit = np.zeros(3)
+        self.bounce_reflected = np.zeros(3)
 
     def settle(self, fractions: np.ndarray) -> None:
         """Book the pending shots ((K, 3) powers) with their (K, 4) (hit, reflected RGB) fractions."""
@@ -42,6 +46,10 @@ class EnergyLedger:
         self.absorbed += ((hit - reflected) * power).sum(axis=0)
         self.escaped += (np.maximum(1.0 - hit, 0.0) * power).sum(axis=0)
         self.surplus += (np.maximum(hit - 1.0, 0.0) * power).sum(axis=0)
+        if self.pending_bounce:
+            self.bounce_shot += power.sum(axis=0)
+            self.bounce_hit += (np.minimum(hit, 1.0) * power).sum(axis=0)
+            self.bounce_reflected += (reflected * power).sum(axis=0)
 
     @property
     def unshot(self) -> np.ndarray:
@@ -66,6 +74,32 @@ def ambient_term(patches: Patches):
     mean_reflectance = (area[:, None] * patches.reflectance).sum(axis=0) / area.sum()
     scale = 1.0 / (area.sum() * np.maximum(1.0 - mean_reflectance, 1e-6))
     return lambda unshot_power: np.asarray(unshot_power) * scale
+
+
+def remainder_power(ledger: EnergyLedger, patches: Patches, unshot_power: np.ndarray) -> np.ndarray:
+    """(3,) power the power still unshot would deliver to the surfaces, it and all it gives rise
+    to: of power U shot, a fraction h lands on surfaces and a fraction r of U is reflected, to be
+    shot in turn, so U h / (1 − r) in all, with h and r measured by the reflected-light shots so
+    far (Cohen et al. 1988's ambient term is the closed-scene case h = 1, r = ρ̄, its fallback)."""
+    area = patches.area
+    unshot_power = np.maximum(np.asarray(unshot_power, dtype=np.float64), 0.0)
+    measured = ledger.bounce_shot > 0
+    shot = np.where(measured, ledger.bounce_shot, 1.0)
+    mean_reflectance = (area[:, None] * patches.reflectance).sum(axis=0) / area.sum()
+    hit = np.where(measured, ledger.bounce_hit / shot, 1.0)
+    reflected = np.where(measured, ledger.bounce_reflected / shot, mean_reflectance)
+    return unshot_power * hit / np.maximum(1.0 - reflected, 1e-3)
+
+
+def remainder_light(power: np.ndarray, recent_light: np.ndarray, element_areas: np.ndarray) -> np.ndarray:
+    """(P, S, S, 3) light H that delivers `power` (3,) laid out like `recent_light`, the light the
+    last shots gathered: later bounces land where the recent ones did, only more evenly (an even
+    ambient term would light what the recent bounces never reach, like a block's side turned to the
+    open front). The result is the solve's extrapolation to convergence, not resolved anew in space."""
+    recent = np.maximum(recent_light, 0.0)
+    delivered = np.einsum("pij,pijc->c", element_areas, recent)
+    scale = np.where(delivered > 0, power / np.where(delivered > 0, delivered, 1.0), 0.0)
+    return recent * scale
 
 
 def time_left(history, tolerance: float):

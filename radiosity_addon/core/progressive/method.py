@@ -27,8 +27,11 @@ from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchSho
                         patch_means, shoot_lamps, shoot_sky)
 from ..timing import StageTimer
 from ..visibility import VARIANTS
-from .ledger import EnergyLedger, ambient_term, time_left
+from .ledger import EnergyLedger, ambient_term, remainder_light, remainder_power, time_left
 from .selection import READBACK, ResidualReader
+
+
+REMAINDER_WINDOW = 4.0  # the light gathered after unshot fell to this many tolerances shapes the remainder
 
 
 @dataclass
@@ -122,7 +125,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         # those shots, less the sky's, is the direct light the lightmaps recompute per texel
         power = patches.area * patches.emission.sum(axis=1)
         forced = [int(p) for p in np.argsort(-power, kind="stable") if power[p] > 0]
-        direct_light = None
+        direct_light = recent_from = None
         while True:
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
@@ -147,6 +150,9 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                 last_preview = time.perf_counter()
             if not forced and direct_light is None:
                 direct_light = lamp_light + textures.read_light() - before_emitters
+            if (recent_from is None and direct_light is not None and settings.complete_remainder
+                    and fraction_left <= REMAINDER_WINDOW * tolerance):
+                recent_from = textures.read_light()  # what is gathered from here on shapes the remainder
             room = min(visibility.capacity, max_shots - shots)
             chosen = residuals.strongest(room) if not forced else None
             done = direct_only or fraction_left <= tolerance or emitted_total <= 0 or not residuals.power.max() > 0
@@ -166,6 +172,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                 batch = [shooters.shooter(int(p), residuals.mean[p], residuals.centroid[p] if centroid else None)
                          for p in chosen]
             ledger.pending = np.array([shooter.power for shooter in batch])
+            ledger.pending_bounce = not batch[0].keeps_residual  # emitters' own emission keeps the rest
             with timer.stage("visibility"):
                 uniforms = visibility.prepare(batch)
             with timer.stage("shoot"):
@@ -180,6 +187,11 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             light = textures.read_light()
         if direct_light is None:  # stopped by the shot budget among the emitters
             direct_light = lamp_light + light - before_emitters
+        remainder = np.zeros(3)
+        if settings.complete_remainder and effects.interreflection and not direct_only and emitted_total > 0:
+            remainder = remainder_power(ledger, patches, unshot_gpu)
+            recent = light - (recent_from if recent_from is not None else direct_light)
+            light = light + remainder_light(remainder, recent, textures.areas)
         elements = textures.radiosity(light)
         areas = textures.areas
 
@@ -188,7 +200,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
     details = ProgressiveDetails(
         shots=shots, stop_reason=stop_reason,
         unshot_fraction=float(unshot_gpu.sum()) / emitted_total if emitted_total > 0 else 0.0,
-        energy={**ledger.as_dict(), "unshot_gpu_sum": float(unshot_gpu.sum())},
+        energy={**ledger.as_dict(), "unshot_gpu_sum": float(unshot_gpu.sum()), "remainder_delivered": remainder.tolist()},
         visibility={"variant": settings.visibility, "resolution": settings.visibility_res,
                     "batch_capacity": visibility.capacity,
                     "tessellation": variant.tessellation, "search_radius": variant.search_radius,
