@@ -121,6 +121,17 @@ class Resources:
     def framebuffer(self, color_attachments, depth_attachment=None):
         return self.adopt(self.ctx.framebuffer(color_attachments, depth_attachment))
 
+    def value_and_id_target(self, size):
+        """An off-screen target, bound with its viewport and cleared: an RGBA float value and an
+        integer id per pixel, depth-tested (what the lightmap rasterizer and the preview draw);
+        returns the framebuffer (attachment 0: values, 1: ids)."""
+        fbo = self.framebuffer([self.texture(size, 4, dtype="f4"), self.texture(size, 1, dtype="i4")],
+                               self.depth_renderbuffer(size))
+        fbo.use()
+        fbo.viewport = (0, 0, *size)
+        fbo.clear(depth=1.0)
+        return fbo
+
     def vertex_array(self, program, content, index_buffer=None, index_element_size: int = 4):
         return self.adopt(self.ctx.vertex_array(program, content, index_buffer=index_buffer,
                                                 index_element_size=index_element_size))

@@ -76,13 +76,7 @@ def render_preview(scene: Scene, lightmaps: dict, camera: Camera | None = None, 
         ctx = res.ctx
         program = preview_gpu.program("preview_scene.vert", "preview_lightmap_trilinear.frag")
         program["view_projection"].write(matrix.T.astype("f4").tobytes())
-        color = res.texture((big_w, big_h), 4, dtype="f4")
-        surface = res.texture((big_w, big_h), 1, dtype="i4")
-        depth = res.depth_renderbuffer((big_w, big_h))
-        fbo = res.framebuffer([color, surface], depth)
-        fbo.use()
-        fbo.viewport = (0, 0, big_w, big_h)
-        fbo.clear(depth=1.0)
+        fbo = res.value_and_id_target((big_w, big_h))  # colour, and the surface of each pixel
         ctx.enable_only(ctx.DEPTH_TEST | ctx.CULL_FACE)  # only fronts emit and receive
         ctx.front_face = "ccw"
         ctx.depth_func = "<"

@@ -33,13 +33,7 @@ def rasterize(gpu: GPU, corners_texels: np.ndarray, lattice: np.ndarray, size: t
         lattice_buffer = res.buffer(lattice_rgba.tobytes())
         vbo = res.buffer(vertices.tobytes())
         vao = res.vertex_array(program, [(vbo, "2f 1i", "in_texel", "in_patch")])
-        radiance = res.texture((width, height), 4, dtype="f4")
-        patch_ids = res.texture((width, height), 1, dtype="i4")
-        depth = res.depth_renderbuffer((width, height))
-        fbo = res.framebuffer([radiance, patch_ids], depth)
-        fbo.use()
-        fbo.viewport = (0, 0, width, height)
-        fbo.clear(depth=1.0)
+        fbo = res.value_and_id_target((width, height))  # radiance, and the patch of each texel
         ctx.enable_only(ctx.DEPTH_TEST)  # no culling: mirrored UV charts wind clockwise
         ctx.depth_func = "<"
         corner_buffer.bind_to_storage_buffer(storage("LATTICE_CORNERS"))
