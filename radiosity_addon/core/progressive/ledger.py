@@ -66,13 +66,16 @@ class EnergyLedger:
         }
 
 
+def mean_reflectance(patches: Patches) -> np.ndarray:
+    """(3,) area-weighted mean reflectance ρ̄."""
+    return (patches.area[:, None] * patches.reflectance).sum(axis=0) / patches.area.sum()
+
+
 def ambient_term(patches: Patches):
     """Cohen et al. 1988: Ambient = R Σ A ΔB / Σ A, R = 1/(1 − ρ̄), as a function of the unshot
     power Σ A ΔB (RGB). For previews only: a preview shows B + ρ · Ambient; the result never
     includes it."""
-    area = patches.area
-    mean_reflectance = (area[:, None] * patches.reflectance).sum(axis=0) / area.sum()
-    scale = 1.0 / (area.sum() * np.maximum(1.0 - mean_reflectance, 1e-6))
+    scale = 1.0 / (patches.area.sum() * np.maximum(1.0 - mean_reflectance(patches), 1e-6))
     return lambda unshot_power: np.asarray(unshot_power) * scale
 
 
@@ -81,13 +84,11 @@ def remainder_power(ledger: EnergyLedger, patches: Patches, unshot_power: np.nda
     to: of power U shot, a fraction h lands on surfaces and a fraction r of U is reflected, to be
     shot in turn, so U h / (1 − r) in all, with h and r measured by the reflected-light shots so
     far (Cohen et al. 1988's ambient term is the closed-scene case h = 1, r = ρ̄, its fallback)."""
-    area = patches.area
     unshot_power = np.maximum(np.asarray(unshot_power, dtype=np.float64), 0.0)
     measured = ledger.bounce_shot > 0
     shot = np.where(measured, ledger.bounce_shot, 1.0)
-    mean_reflectance = (area[:, None] * patches.reflectance).sum(axis=0) / area.sum()
     hit = np.where(measured, ledger.bounce_hit / shot, 1.0)
-    reflected = np.where(measured, ledger.bounce_reflected / shot, mean_reflectance)
+    reflected = np.where(measured, ledger.bounce_reflected / shot, mean_reflectance(patches))
     return unshot_power * hit / np.maximum(1.0 - reflected, 1e-3)
 
 
@@ -107,8 +108,8 @@ SLOWEST = 0.7  # the most the rate is let fall per doubling of the time (measure
 
 def log_rate(history, start: float, end: float) -> float | None:
     """The rate of decrease of log(unshot) between the entries at times `start` and `end`."""
-    times = [entry[0] for entry in history]  # increasing
-    (t0, u0), (t1, u1) = (history[max(bisect.bisect_right(times, t) - 1, 0)] for t in (start, end))
+    at = lambda t: history[max(bisect.bisect_right(history, t, key=lambda entry: entry[0]) - 1, 0)]  # noqa: E731
+    (t0, u0), (t1, u1) = at(start), at(end)  # times increase: a bisection, not a pass over the history
     if t1 <= t0 or u1 <= 0 or u0 <= u1:
         return None
     return (math.log(u0) - math.log(u1)) / (t1 - t0)

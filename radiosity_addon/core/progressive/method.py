@@ -126,6 +126,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         power = patches.area * patches.emission.sum(axis=1)
         forced = [int(p) for p in np.argsort(-power, kind="stable") if power[p] > 0]
         direct_light = recent_from = None
+        completing = settings.complete_remainder and effects.interreflection and not direct_only and emitted_total > 0
         while True:
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
@@ -150,8 +151,8 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                 last_preview = time.perf_counter()
             if not forced and direct_light is None:
                 direct_light = lamp_light + textures.read_light() - before_emitters
-            if (recent_from is None and direct_light is not None and settings.complete_remainder
-                    and fraction_left <= REMAINDER_WINDOW * tolerance):
+            if completing and recent_from is None and direct_light is not None \
+                    and fraction_left <= REMAINDER_WINDOW * tolerance:
                 recent_from = textures.read_light()  # what is gathered from here on shapes the remainder
             room = min(visibility.capacity, max_shots - shots)
             chosen = residuals.strongest(room) if not forced else None
@@ -188,7 +189,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         if direct_light is None:  # stopped by the shot budget among the emitters
             direct_light = lamp_light + light - before_emitters
         remainder = np.zeros(3)
-        if settings.complete_remainder and effects.interreflection and not direct_only and emitted_total > 0:
+        if completing:
             remainder = remainder_power(ledger, patches, unshot_gpu)
             recent = light - (recent_from if recent_from is not None else direct_light)
             light = light + remainder_light(remainder, recent, textures.areas)
