@@ -59,7 +59,10 @@ void main() {
     }
     vec3 normal = cross(v_position[2] - v_position[0], v_position[3] - v_position[1]);
     // A back seen is its twin patch; a single-sided back occludes but receives nothing (item 0).
-    bool front = dot(eye - v_position[0], normal) > 0.0;
+    // An orthographic view (a sun) looks along its pole from everywhere: the eye point is not where
+    // the rays come from (a wall the sun grazes would face away from it).
+    vec3 toward_eye = ortho_extent > 0.0 ? -axis_z : eye - v_position[0];
+    bool front = dot(toward_eye, normal) > 0.0;
     uint id = front ? v_patch[0] + 1u : (v_twin[0] >= 0 ? uint(v_twin[0]) + 1u : 0u);
     // Adaptive: as many segments per side as the patch's angular size needs
     // (a chord of SEGMENT_ANGLE radians strays ~angle^2/8 from the curved image).

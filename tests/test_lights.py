@@ -93,6 +93,21 @@ def test_sun_lights_evenly_and_a_panel_casts_its_shadow(gpu):
     np.testing.assert_allclose(radiosity[far_from_shadow], lit, rtol=1e-3)
 
 
+def test_a_sun_grazing_a_wall_lights_it_whatever_the_map_eye_sees(gpu):
+    """The sun's map is orthographic: its eye point (outside the scene) is not where its rays come
+    from. A wall's outer face the sun grazes (cos 0.2) lies behind that point's plane of view; it
+    was drawn as a back (item 0) and baked black, where Cycles lights it (the room bench's west
+    wall outside)."""
+    direction = np.array([0.2, 0.8, -math.sqrt(1 - 0.68)])
+    sun = {"name": "sun", "type": "sun", "direction": direction.tolist(), "color": [1, 1, 1], "strength": 2.0}
+    wall = surface("wall", [[0, 1, 0], [0, -1, 0], [0, -1, 2], [0, 1, 2]], RHO, 0.0)  # facing -x
+    floor = surface("floor", [[0, -1, 0], [4, -1, 0], [4, 1, 0], [0, 1, 0]], RHO, 0.0)
+    solution = progressive(scene_from_dict({"surfaces": [wall, floor], "lights": [sun]}), gpu, refinements=0)
+    assert solution.report.effects.occlusion
+    wall_radiosity = solution.element_radiosity[solution.patches.surface == 0]
+    np.testing.assert_allclose(wall_radiosity, RHO * 2.0 * 0.2 / math.pi, rtol=1e-4)
+
+
 def test_area_lamp_is_an_emitting_polygon(gpu):
     corners = [[-0.2, -0.2, 1.0], [-0.2, 0.2, 1.0], [0.2, 0.2, 1.0], [0.2, -0.2, 1.0]]  # front faces -z
     lamp = {"name": "panel", "type": "area", "vertices": corners, "color": [1, 1, 1], "power": 50.0}
