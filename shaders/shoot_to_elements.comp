@@ -69,9 +69,12 @@ void main() {
 #endif
         for (int k = 0; k < shot_count; ++k) {
             if (int(shots[k].axis_y_patch.w) == p) {
-                // the shot leaves the shooter's residual: all of it, or only what it shot
-                unshot = shots[k].normal_keeps.w != 0.0
-                       ? max(unshot - vec4(weight * shots[k].radiosity.rgb, 0.0), vec4(0.0)) : vec4(0.0);
+                // the shot leaves the shooter's residual: all of it, or only what it shot (an
+                // emitter's piece: its share of that)
+                float keeps = shots[k].normal_keeps.w;
+                unshot = keeps != 0.0
+                       ? max(unshot - vec4((keeps - 1.0) * weight * shots[k].radiosity.rgb, 0.0), vec4(0.0))
+                       : vec4(0.0);
                 continue;
             }
             int kind = int(shots[k].axis_x_kind.w);

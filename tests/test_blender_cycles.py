@@ -14,10 +14,12 @@ import bpy
 from radiosity_addon.bench.cycles import bake_object
 from radiosity_addon.blender.tags import CREATED_UV
 
-TOLERANCE = 0.10  # per object and channel, relative to Cycles' mean
+# per object and channel, relative to Cycles' mean: measured -0.7 ... +2.9 % against Cycles at
+# 512 samples x 2 once the gap between the light and the ceiling was resolved (it was +4 ... +11 %)
+TOLERANCE = 0.05
 
 
-def test_cornell_lightmaps_agree_with_cycles_within_ten_percent_per_object():
+def test_cornell_lightmaps_agree_with_cycles_within_five_percent_per_object():
     support.open_blend(support.CORNELL, method="auto", quality="final")
     objects = [obj for obj in bpy.context.scene.objects if obj.type == "MESH"]
     assert bpy.ops.radiosity.bake() == {"FINISHED"}

@@ -47,12 +47,33 @@ def test_refinement_resolves_the_gap_along_the_emitters_outline_only(gpu):
     assert ceiling.sum() < 0.1 * uniform  # far fewer patches than splitting everything that fine
 
 
+def test_the_gap_at_an_emitter_is_resolved_near_its_opening_even_where_no_light_changes(gpu):
+    """The emitter's back gets no direct light (no spread to split on), but light trapped between
+    it and the ceiling 5 mm above escapes at the outline: both sides are split there down to
+    `emitter_gap_resolution` gaps, and not in the middle of the gap nor far from the emitter."""
+    gap, resolution = 0.005, 4.0
+    scene = scene_from_dict(light_under_ceiling(gap))
+    solution = solve(scene, SolveSettings(patch_size=0.5, elements=2, refinements=6, tolerance=1e-2,
+                                          emitter_gap_resolution=resolution), gpu=gpu)
+    patches = solution.patches
+    size = np.sqrt(patches.area)
+    centre = patches.center
+    from_outline = np.maximum(np.abs(centre[:, 0] - 1.0), np.abs(centre[:, 1] - 1.0)) - 0.2  # < 0 inside
+    back = (patches.surface == 2) & patches.is_back  # the emitter's back, facing the ceiling
+    near = np.abs(from_outline) < 0.01
+    assert size[back & near].max() <= resolution * gap * 1.01
+    assert size[back & (from_outline < -0.1)].min() > 2 * resolution * gap  # the middle stays coarse
+    ceiling = patches.surface == 1
+    assert size[ceiling & near].max() <= resolution * gap * 1.01
+    assert size[ceiling & (np.abs(from_outline) > 0.3)].min() >= 0.25
+
+
 def test_refinement_keeps_within_a_patch_budget_counting_back_sides():
     scene = scene_from_dict(light_under_ceiling(0.01))
     backs = np.ones(len(scene), dtype=bool)
     patches = subdivide(scene, 2, 0.5, backs)
-    wanted = np.zeros(len(patches), dtype=bool)
-    wanted[:6] = wanted[-2:] = True  # fronts and backs
+    wanted = np.zeros(len(patches))
+    wanted[:6] = wanted[-2:] = 1.0  # fronts and backs, by priority
     for budget in (len(patches) + 7, len(patches) + 20, len(patches) + 100):
         split = split_patches(patches, within_budget(patches, wanted, budget), backs)
         assert len(split) <= budget

@@ -73,6 +73,15 @@ def test_a_suns_shadow_is_as_sharp_as_the_lightmap(gpu):
     assert (clear & shadowed).sum() > 200
 
 
+def box_faces(low, high) -> list:
+    """The six outward faces of the axis-aligned box [low, high], counter-clockwise from outside."""
+    x0, y0, z0 = low
+    x1, y1, z1 = high
+    return [[[x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]], [[x0, y0, z0], [x0, y1, z0], [x1, y1, z0], [x1, y0, z0]],
+            [[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1]], [[x1, y1, z0], [x0, y1, z0], [x0, y1, z1], [x1, y1, z1]],
+            [[x0, y1, z0], [x0, y0, z0], [x0, y0, z1], [x0, y1, z1]], [[x1, y0, z0], [x1, y1, z0], [x1, y1, z1], [x1, y0, z1]]]
+
+
 def occluded_emitter_light(points, emitter_corners, emission, box_low, box_high, samples=48):
     """E ∫ cos cos / (π r²) V dA over a downward-facing square emitter, V by ray casting against an
     axis-aligned box (midpoint rule, samples² points): the independent reference."""
@@ -102,17 +111,9 @@ def test_no_light_leaks_under_a_box_and_its_penumbra_is_texel_sharp(gpu, method)
     nothing, and every texel around it — the contact line, the penumbra — matches a ray-cast
     reference (the floor's one 2 m patch could not show any of it)."""
     low, high = np.array([0.8, 0.8, 0.0]), np.array([1.2, 1.2, 0.4])
-    x0, y0, z0 = low
-    x1, y1, z1 = high
-    faces = {"top": [[x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]],
-             "bottom": [[x0, y0, z0], [x0, y1, z0], [x1, y1, z0], [x1, y0, z0]],
-             "south": [[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1]],
-             "north": [[x1, y1, z0], [x0, y1, z0], [x0, y1, z1], [x1, y1, z1]],
-             "west": [[x0, y1, z0], [x0, y0, z0], [x0, y0, z1], [x0, y1, z1]],
-             "east": [[x1, y0, z0], [x1, y1, z0], [x1, y1, z1], [x1, y0, z1]]}
     emitter_corners = [[0.75, 0.75, 1.5], [0.75, 1.25, 1.5], [1.25, 1.25, 1.5], [1.25, 0.75, 1.5]]
     surfaces = ([{**surface("floor", FLOOR, 0.5, 0.0), "uv": UV}]
-                + [surface(f"box {name}", corners, 0.0, 0.0, obj="box") for name, corners in faces.items()]
+                + [surface(f"box {k}", corners, 0.0, 0.0, obj="box") for k, corners in enumerate(box_faces(low, high))]
                 + [surface("emitter", emitter_corners, 0.0, 10.0)])
     scene = scene_from_dict({"surfaces": surfaces})
     solution = solve(scene, SolveSettings(method=method, subdiv=1, elements=2, hemicube_res=64, refinements=0),
@@ -133,3 +134,29 @@ def test_no_light_leaks_under_a_box_and_its_penumbra_is_texel_sharp(gpu, method)
     outside = from_box > 1.5 / 64
     relative_rms = np.sqrt(((measured - exact)[outside] ** 2).mean() / (exact[outside] ** 2).mean())
     assert relative_rms < 0.02
+
+
+def test_the_solves_own_direct_light_keeps_penumbrae_and_leaks_nowhere(gpu):
+    """What the solve's bounces start from: the direct light of the box scene above at the floor's
+    element centres (progressive, 0.5 m patches of 8 x 8 elements, the emitter one patch), against
+    the ray-cast reference. The emitter shoots in pieces, each with its own hemi-cube, and an
+    element behind what its pixel shows is hidden: the floor's total is right to 1.5 % and its
+    relative RMS is 2.8 % (shot from the emitter's centre it was 25 %: hard shadows)."""
+    from radiosity_addon.core.shooting import element_areas, element_centers
+
+    low, high = np.array([0.8, 0.8, 0.0]), np.array([1.2, 1.2, 0.4])
+    box = [surface(f"box {k}", c, 0.0, 0.0, obj="box") for k, c in enumerate(box_faces(low, high))]
+    emitter_corners = [[0.75, 0.75, 1.0], [0.75, 1.25, 1.0], [1.25, 1.25, 1.0], [1.25, 0.75, 1.0]]
+    scene = scene_from_dict({"surfaces": [surface("floor", FLOOR, 0.0, 0.0), *box,
+                                          surface("emitter", emitter_corners, 0.0, 10.0)]})
+    solution = solve(scene, SolveSettings(patch_size=0.5, elements=8, refinements=0), gpu=gpu)
+    floor = np.flatnonzero(solution.patches.surface == 0)
+    points = element_centers(solution.patches, 8)[floor].reshape(-1, 3)
+    areas = element_areas(solution.patches, 8)[floor].reshape(-1)
+    measured = solution.element_direct[floor].reshape(-1, 3)[:, 0]
+    exact = occluded_emitter_light(points, emitter_corners, 10.0, low, high)
+    under = np.all((points[:, :2] > low[:2] + 0.02) & (points[:, :2] < high[:2] - 0.02), axis=1)
+    assert under.sum() > 30 and measured[under].max() == 0.0  # nothing reaches under the box
+    assert (areas * measured).sum() == pytest.approx((areas * exact).sum(), rel=0.015)
+    relative_rms = np.sqrt((areas * (measured - exact) ** 2).sum() / (areas * exact ** 2).sum())
+    assert relative_rms < 0.05

@@ -26,7 +26,7 @@ struct Shot {
     vec4 eye_area;        // the visibility eye, the polygon's area
     vec4 axis_x_kind;     // the eye's frame: x, and the kind
     vec4 axis_y_patch;    // y, and the patch shot (-1: none)
-    vec4 normal_keeps;    // the pole (a polygon's normal), 1 when the patch keeps the rest of its residual
+    vec4 normal_keeps;    // the pole (a polygon's normal); 0: the shot clears its patch's residual, k > 0: takes (k - 1) x radiosity off it
     vec4 corner[4];       // the polygon, counter-clockwise seen from its front
     vec4 radiosity;       // what it shoots
     vec4 spot;            // the lamp's axis or the sun's travel direction, cos of half the cone (-2: none)

@@ -24,7 +24,7 @@ from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
 from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchShooters, ShootingPass, ShotVisibility,
-                        patch_means, shoot_lamps, shoot_sky)
+                        emitter_pieces, patch_means, shoot_lamps, shoot_sky)
 from ..timing import StageTimer
 from ..visibility import VARIANTS
 from .ledger import EnergyLedger, ambient_term, remainder_light, remainder_power, time_left
@@ -117,14 +117,16 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         emitted_total = float(ledger.emitted.sum())
 
         shots = batches = 0
-        history = []  # (elapsed, unshot fraction) for the estimate of time left
+        # (seconds since the emitters shot, unshot fraction) for the estimate of time left: the
+        # emitters' pieces take the unshot down linearly, the bounces after them geometrically
+        history = []
+        bounces_from = None
         last_preview = time.perf_counter()
         unshot_gpu = emitted.copy()
         stop_reason = "tolerance"
-        # every emitter shoots its own emission first (and keeps what it received): the light after
-        # those shots, less the sky's, is the direct light the lightmaps recompute per texel
-        power = patches.area * patches.emission.sum(axis=1)
-        forced = [int(p) for p in np.argsort(-power, kind="stable") if power[p] > 0]
+        # every emitter shoots its own emission first, in pieces (and keeps what it received): the
+        # light after those shots, less the sky's, is the direct light the lightmaps recompute per texel
+        forced = emitter_pieces(scene, patches, effects.occlusion)
         direct_light = recent_from = None
         completing = settings.complete_remainder and effects.interreflection and not direct_only and emitted_total > 0
         while True:
@@ -135,13 +137,16 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             unshot_gpu = residuals.unshot
             fraction_left = float(unshot_gpu.sum()) / emitted_total if emitted_total > 0 else 0.0
             elapsed = time.perf_counter() - started
-            history.append((elapsed, fraction_left))
+            if not forced:
+                bounces_from = elapsed if bounces_from is None else bounces_from
+                history.append((elapsed - bounces_from, fraction_left))
             if progress is not None:
-                eta = time_left(history, tolerance)
+                eta = time_left(history, tolerance) if not forced else None
                 progress(min(1.0, max(0.0, 1.0 - fraction_left)),
                          f"shot {shots}, unshot {fraction_left:.2e} of emitted"
                          + (f", ~{eta:.0f} s left" if eta is not None else ""),
                          {"shots": shots, "elapsed": elapsed, "eta": eta, "unshot_fraction": fraction_left,
+                          "phase": "emitters" if forced else "bounces",
                           "ambient": ambient(unshot_gpu).tolist()})
             if preview is not None and time.perf_counter() - last_preview >= preview_interval:
                 with timer.stage("preview"):
@@ -163,11 +168,8 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             if room <= 0:
                 stop_reason = "max_shots"
                 break
-            if forced:  # emitters' own emission, from their centres
-                batch = [shooters.shooter(p, patches.emission[p]) for p in forced[:room]]
-                for shooter in batch:
-                    shooter.keeps_residual = True
-                forced = forced[room:]
+            if forced:  # emitters' own emission
+                batch, forced = forced[:room], forced[room:]
             else:
                 centroid = settings.shoot_from == "centroid"
                 batch = [shooters.shooter(int(p), residuals.mean[p], residuals.centroid[p] if centroid else None)

@@ -17,8 +17,9 @@ import numpy as np
 
 from ..gpu import Resources
 from ..scene import Patches, Scene
+from ..scene.geometry import reversed_corners
 from .elements import ElementTextures
-from .lamps import lamp_shooters, polygon_shooters
+from .lamps import AREA_LAMP_MAX_SPLIT, lamp_shooters, polygon_shooters
 from .shooters import Shooter
 from .shooting_pass import PatchBuffers, ShootingPass
 from .shots import ShotVisibility
@@ -33,7 +34,8 @@ class DirectLightWork:
     sky_hemicubes: int = 0
 
 
-MAX_SPLIT_EMITTERS = 64  # emissive patches split into pieces for the texel pass; beyond, one shot each
+MAX_SPLIT_EMITTERS = 64  # emitting polygons split into pieces for the texel pass; beyond, one shot each
+SOLVE_EMITTER_PIECES = 256  # the solve's element light needs fewer: about this many pieces in all
 
 
 def has_direct_light(scene: Scene) -> bool:
@@ -45,14 +47,56 @@ def lamps_as_shooters(scene: Scene) -> list[Shooter]:
     return [shooter for lamp in scene.lamps for shooter in lamp_shooters(lamp, (low + high) / 2, scene.diameter)]
 
 
-def direct_shooters(scene: Scene, patches: Patches) -> list[Shooter]:
-    """Every shot of the direct light: the lamps', and the emissive patches' in pieces (one each
-    when there are more than MAX_SPLIT_EMITTERS of them)."""
+def emitter_pieces(scene: Scene, patches: Patches, occlusion: bool = True,
+                   budget: int = SOLVE_EMITTER_PIECES) -> list[Shooter]:
+    """The solve's shots of the emissive patches' own emission, strongest first, each patch in
+    pieces so that the elements' shadows keep their penumbra: about `budget` pieces for the
+    fronts, as many for the backs that emit (8 x 8 at most each); whole where nothing occludes.
+    Each patch keeps the rest of its residual, and each piece takes its share (of the area) of the
+    emission off it."""
+    power = patches.area * patches.emission.sum(axis=1)
+    emitting = [int(p) for p in np.argsort(-power, kind="stable") if power[p] > 0]
+    fronts = int(np.count_nonzero(~patches.is_back[emitting])) if emitting else 0
+    split = int(np.clip(np.sqrt(budget / max(fronts, 1)), 1, AREA_LAMP_MAX_SPLIT)) if occlusion else 1
+    pieces = []
+    for p in emitting:
+        shots = polygon_shooters(patches.corners[p], patches.emission[p], scene.diameter, patch=p, max_split=split)
+        total = sum(piece.area for piece in shots)
+        for piece in shots:
+            piece.keeps_residual, piece.residual_share = True, piece.area / total
+        pieces.extend(shots)
+    return pieces
+
+
+def emitting_polygons(scene: Scene, patches: Patches) -> list[tuple[np.ndarray, np.ndarray, int]]:
+    """(corners (4, 3), emission (3,), patch or -1) of what emits, for the lightmaps' direct light:
+    each side of an emissive surface whole when its patches all emit alike (the light does not
+    depend on how refinement split it), else its patches one by one (a textured emission)."""
     emitting = np.flatnonzero(np.any(patches.emission > 0, axis=1))
-    size = scene.diameter if len(emitting) <= MAX_SPLIT_EMITTERS else np.inf
-    pieces = [shooter for p in emitting
-              for shooter in polygon_shooters(patches.corners[p], patches.emission[p], size, patch=int(p))]
-    return lamps_as_shooters(scene) + pieces
+    side = patches.surface[emitting] * 2 + patches.is_back[emitting]
+    order = np.argsort(side, kind="stable")
+    groups = np.split(emitting[order], np.flatnonzero(np.diff(side[order])) + 1) if len(emitting) else []
+    polygons = []
+    for group in groups:
+        emission = patches.emission[group]
+        if len(group) > 1 and np.allclose(emission, emission[0], rtol=1e-6, atol=0.0):
+            surface = int(patches.surface[group[0]])
+            corners = scene.corners[surface:surface + 1]
+            if patches.is_back[group[0]]:
+                corners = reversed_corners(corners, scene.corner_count[surface:surface + 1] == 3)
+            polygons.append((corners[0], emission[0], -1))
+        else:
+            polygons.extend((patches.corners[p], patches.emission[p], int(p)) for p in group)
+    return polygons
+
+
+def direct_shooters(scene: Scene, patches: Patches) -> list[Shooter]:
+    """Every shot of the lightmaps' direct light: the lamps', and the emitting polygons' in pieces
+    (one piece each when there are more than MAX_SPLIT_EMITTERS of them)."""
+    polygons = emitting_polygons(scene, patches)
+    size = scene.diameter if len(polygons) <= MAX_SPLIT_EMITTERS else np.inf
+    return lamps_as_shooters(scene) + [piece for corners, emission, patch in polygons
+                                       for piece in polygon_shooters(corners, emission, size, patch=patch)]
 
 
 def shoot_lamps(scene: Scene, shooting: ShootingPass) -> DirectLightWork:

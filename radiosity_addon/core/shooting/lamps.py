@@ -34,15 +34,17 @@ def lamp_shooters(lamp: Lamp, scene_centre: np.ndarray, scene_diameter: float) -
     return polygon_shooters(lamp.vertices, lamp.area_radiance, scene_diameter)
 
 
-def polygon_shooters(corners: np.ndarray, radiance: np.ndarray, scene_diameter: float, patch: int = -1) -> list[Shooter]:
+def polygon_shooters(corners: np.ndarray, radiance: np.ndarray, scene_diameter: float, patch: int = -1,
+                     max_split: int = AREA_LAMP_MAX_SPLIT) -> list[Shooter]:
     """An emitting polygon (4, 3) (a triangle repeats its last corner) split into pieces, each with
     its own visibility map, so shadows keep their penumbra (one map from the centre turns a nearby
-    object's penumbra into umbra): pieces at most AREA_LAMP_PIECE of the scene, 8 x 8 at most.
+    object's penumbra into umbra): pieces at most AREA_LAMP_PIECE of the scene, `max_split` x
+    `max_split` at most.
     `patch`: the patch the polygon is (left out of its own maps), -1 for a lamp."""
     normal = polygon_area_vector(corners)
     normal = normal / np.linalg.norm(normal)
     sides = np.linalg.norm(np.roll(corners, -1, axis=0) - corners, axis=1)
-    split = int(np.clip(np.ceil(sides.max() / (scene_diameter * AREA_LAMP_PIECE)), 1, AREA_LAMP_MAX_SPLIT))
+    split = int(np.clip(np.ceil(sides.max() / (scene_diameter * AREA_LAMP_PIECE)), 1, max_split))
     grid = np.arange(split + 1) / split
     s0, t0 = np.meshgrid(grid[:-1], grid[:-1])
     offsets = np.array([[0, 0], [1, 0], [1, 1], [0, 1]]) / split

@@ -67,7 +67,7 @@ class ShootingPass:
         self.program = res.gpu.compute("shoot_to_elements.comp", defines={
             "ELEMENT_FORMAT": textures.image_format, "ELEMENTS": layout.elements, "GUTTER": layout.gutter,
             "KERNEL_EXACT": int(kernel == "exact"), "RECORD_VISIBILITY": int(record_visibility),
-            "INTERREFLECTION": int(interreflection), **visibility.defines,
+            "INTERREFLECTION": int(interreflection), "HIDE_BEHIND_OCCLUDERS": 1, **visibility.defines,
         })
         self.element_count = layout.patch_count * layout.elements ** 2
         self.layout_uniforms = {"patch_count": layout.patch_count, "padded_tiles_per_row": layout.padded_tiles_per_row,
