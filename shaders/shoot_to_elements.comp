@@ -3,8 +3,8 @@
 //   dH = B_k * F(element point -> shooter k) * V
 // into its light (padded tile, gutter texels copied from the element they continue; B = E + rho H),
 // and dB = rho_recv * dH into its residual (unpadded tile, weighted by element area so that mip
-// means are power per patch area). Each shooter's own residual is cleared (or, when it keeps the
-// rest, reduced by what it shot) before what the batch's other shots send it is added.
+// means are power per patch area). Each shooter's own residual is cleared before what the batch's
+// other shots send it is added (emitters' pieces shoot for no patch: emission is not in the residual).
 // F and V come from the "shot" include (its records: shots[0 .. shot_count)).
 // Each work group also sums, per shot, the hit fraction and the reflected fractions (per channel)
 // of the shooter's power, added in fixed point to energy[4k .. 4k + 3].
@@ -69,12 +69,7 @@ void main() {
 #endif
         for (int k = 0; k < shot_count; ++k) {
             if (int(shots[k].axis_y_patch.w) == p) {
-                // the shot leaves the shooter's residual: all of it, or only what it shot (an
-                // emitter's piece: its share of that)
-                float keeps = shots[k].normal_keeps.w;
-                unshot = keeps != 0.0
-                       ? max(unshot - vec4((keeps - 1.0) * weight * shots[k].radiosity.rgb, 0.0), vec4(0.0))
-                       : vec4(0.0);
+                unshot = vec4(0.0);  // the shot leaves the shooter's residual
                 continue;
             }
             int kind = int(shots[k].axis_x_kind.w);

@@ -27,6 +27,7 @@ REFINE_FLOOR = 0.05
 PROBE_ELEMENTS = 4  # elements per patch side the direct light is measured on
 GAP_RESOLUTION = 2.0  # patches facing another surface closely are split down to this many gaps
 SMALLEST_PATCH = 1 / 1024  # of the scene's diameter: no split below it
+REFINE_MIN_PATCHES = 2000  # the spread rule may add this many patches whatever the scene's size
 RIM_GAPS = 3.0  # within this many gaps (plus its size) of a gap's opening, a patch facing across it is split
 OPPOSED_COSINE = 0.7  # a gap is between surfaces turned towards each other (not two walls at a corner)
 
@@ -126,19 +127,23 @@ def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: fl
     return priority
 
 
+def added_by_splitting(patches: Patches, rows: np.ndarray) -> np.ndarray:
+    """Patches each split of `rows` adds: three, six when the patch's back is simulated too (a
+    back is split with its front)."""
+    paired = (patches.twin[rows] >= 0) | (patches.back_of[rows] >= 0)
+    return np.where(paired, 6, 3)
+
+
 def within_budget(patches: Patches, priority: np.ndarray, budget: int | None) -> np.ndarray:
     """(P,) bool: the patches of positive `priority` to split, highest first, so that the patches
-    number at most `budget` once split (a split adds three patches, six when the patch's back is
-    simulated too)."""
+    number at most `budget` once split."""
     chosen = np.flatnonzero(priority > 0)
     split = np.zeros(len(patches), dtype=bool)
     if budget is None:
         split[chosen] = True
         return split
-    paired = (patches.twin[chosen] >= 0) | (patches.back_of[chosen] >= 0)  # a back is split with its front
-    added = np.where(paired, 6, 3)
     order = np.argsort(-priority[chosen], kind="stable")
-    fits = np.cumsum(added[order]) <= budget - len(patches)
+    fits = np.cumsum(added_by_splitting(patches, chosen[order])) <= budget - len(patches)
     split[chosen[order[fits]]] = True
     return split
 
@@ -146,10 +151,14 @@ def within_budget(patches: Patches, priority: np.ndarray, budget: int | None) ->
 def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
            budget: int | None = None) -> tuple[Patches, list[int]]:
     """`patches` split where the direct light changes fast, and how many were split per round;
-    never more than `budget` patches in all (the hemi-cube method's matrices must fit)."""
+    never more than `budget` patches in all (the hemi-cube method's matrices must fit). The splits
+    of the spread rule add at most `settings.refine_budget` times the patches there were (at least
+    REFINE_MIN_PATCHES), largest first, so refinement grows linearly with the scene; the gap rule's
+    splits (at emitters) come first and are not counted."""
     from dataclasses import replace
 
     probe = replace(settings, elements=max(settings.elements, PROBE_ELEMENTS))
+    spread_room = max(int(settings.refine_budget * len(patches)), REFINE_MIN_PATCHES)
     refined = []
     for level in range(settings.refinements):
         with timer.stage("refine"):
@@ -157,7 +166,10 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
             min_size = SMALLEST_PATCH * scene.diameter
             priority = patches_to_refine(patches, light, settings.refine_threshold, min_size, scene.corners,
                                          settings.emitter_gap_resolution)
-            split = within_budget(patches, priority, budget)
+            gap_rule = np.isinf(priority)
+            spread = within_budget(patches, np.where(gap_rule, 0.0, priority), len(patches) + spread_room)
+            spread_room -= int(added_by_splitting(patches, np.flatnonzero(spread)).sum())
+            split = within_budget(patches, np.where(gap_rule | spread, priority, 0.0), budget)
             if not split.any():
                 break
             refined.append(int(split.sum()))

@@ -20,15 +20,15 @@ QUALITIES = ("draft", "good", "final")
 # unshot power left relative to the emitted; hemi-cube, the change per sweep relative to max B.
 QUALITY_PRESETS = {
     "draft": {"solve": {"patch_size": 1.0, "elements": 2, "refinements": 5, "visibility_res": 256,
-                        "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 8.0},
+                        "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 8.0, "refine_budget": 0.5},
               "tolerance": {"progressive": 3e-2, "hemicube": 1e-3},
               "lightmaps": {"direct_map_resolution": 512}},
     "good": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
-                       "hemicube_res": 128, "hemicube_elements": 2, "emitter_gap_resolution": 4.0},
+                       "hemicube_res": 128, "hemicube_elements": 2, "emitter_gap_resolution": 4.0, "refine_budget": 1.0},
              "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
              "lightmaps": {"direct_map_resolution": 1024}},
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 6, "visibility_res": 1024,
-                        "hemicube_res": 256, "hemicube_elements": 2, "emitter_gap_resolution": 2.0},
+                        "hemicube_res": 256, "hemicube_elements": 2, "emitter_gap_resolution": 2.0, "refine_budget": 3.0},
               "tolerance": {"progressive": 3e-3, "hemicube": 1e-5},
               "lightmaps": {"direct_map_resolution": 2048}},
 }
@@ -67,6 +67,7 @@ class SolveSettings:
     refinements: int = 5  # rounds of splitting patches where the direct light changes fast, before the solve
     refine_threshold: float = 0.5  # split a patch whose light spreads more than this fraction of its mean
     emitter_gap_resolution: float = 4.0  # split patches across a narrow gap from an emitter down to this many gaps
+    refine_budget: float = 1.0  # the spread rule's splits add at most this many times the patches there were
 
     @classmethod
     def preset(cls, quality: str = "good", **given) -> "SolveSettings":
@@ -108,6 +109,8 @@ class SolveSettings:
             raise SolveError("shooters per pass must lie between 1 and 64")
         if not 0 <= self.refinements <= 8 or not self.refine_threshold > 0:
             raise SolveError("refinements must lie between 0 and 8, the refine threshold above 0")
+        if not self.refine_budget >= 0:
+            raise SolveError("the refine budget must not be negative")
         if not self.emitter_gap_resolution >= 1:
             raise SolveError("the emitter gap resolution must be at least 1 (patches split down to that many gaps)")
 

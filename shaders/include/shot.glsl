@@ -15,8 +15,8 @@
 //
 // Defines: MAX_SHOTS, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN (the map's guard), OCCLUSION.
 
-// HIDE_BEHIND_OCCLUDERS (the texel pass): a receiver behind the patch its pixel shows is hidden,
-// never searched past (the element pass keeps the search: its receivers are patch-sized anyway)
+// HIDE_BEHIND_OCCLUDERS (both passes set it): a receiver behind the patch its pixel shows is
+// hidden, never searched past
 #ifndef HIDE_BEHIND_OCCLUDERS
 #define HIDE_BEHIND_OCCLUDERS 0
 #endif
@@ -26,7 +26,7 @@ struct Shot {
     vec4 eye_area;        // the visibility eye, the polygon's area
     vec4 axis_x_kind;     // the eye's frame: x, and the kind
     vec4 axis_y_patch;    // y, and the patch shot (-1: none)
-    vec4 normal_keeps;    // the pole (a polygon's normal); 0: the shot clears its patch's residual, k > 0: takes (k - 1) x radiosity off it
+    vec4 normal_w;        // the pole (a polygon's normal)
     vec4 corner[4];       // the polygon, counter-clockwise seen from its front
     vec4 radiosity;       // what it shoots
     vec4 spot;            // the lamp's axis or the sun's travel direction, cos of half the cone (-2: none)
@@ -160,7 +160,7 @@ bool shot_sees(int k, vec3 x, vec3 n, int plane) {
     if (kind == 2 ? dot(n, shots[k].spot.xyz) >= 0.0 : dot(n, d) >= 0.0) {
         return false;  // the receiver turns its back to the shooter (the sun lights its other side)
     }
-    vec3 q = vec3(dot(d, shots[k].axis_x_kind.xyz), dot(d, shots[k].axis_y_patch.xyz), dot(d, shots[k].normal_keeps.xyz));
+    vec3 q = vec3(dot(d, shots[k].axis_x_kind.xyz), dot(d, shots[k].axis_y_patch.xyz), dot(d, shots[k].normal_w.xyz));
     if (q.z <= 0.0) {
         return false;  // behind the shooter
     }
@@ -191,6 +191,6 @@ float shot_factor(int k, vec3 x, vec3 n, int plane, float sky) {
                               shots[k].corner[3].xyz);
     return polygon_form_factor(polygon, x, n);
 #else
-    return disk_form_factor(shots[k].eye_area.xyz, shots[k].normal_keeps.xyz, shots[k].eye_area.w, x, n);
+    return disk_form_factor(shots[k].eye_area.xyz, shots[k].normal_w.xyz, shots[k].eye_area.w, x, n);
 #endif
 }

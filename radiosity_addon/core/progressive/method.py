@@ -96,7 +96,9 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
     shooters = PatchShooters(patches)
     with gpu.resources() as res:
         with timer.stage("setup"):
-            textures = ElementTextures(res, patches, settings.elements, channels=effects.channels)
+            # the emitters' own emission is not in the residual: their pieces below shoot it
+            textures = ElementTextures(res, patches, settings.elements, channels=effects.channels,
+                                       unshot_emission=False)
             buffers = PatchBuffers(res, patches, textures)
             visibility = ShotVisibility(res, patches, settings.visibility_res, settings.visibility, scene.diameter,
                                         effects.occlusion, capacity=settings.batch_shots)
@@ -112,7 +114,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             textures.build_mipmaps()
             first = reader.read()
         # lamps and the sky enter the ledger as the power their first bounce adds to the unshot
-        lamp_first_bounce = np.maximum(first.unshot - emitted, 0.0)
+        lamp_first_bounce = np.maximum(first.unshot, 0.0)
         ledger.emitted = ledger.emitted + lamp_first_bounce
         emitted_total = float(ledger.emitted.sum())
 
@@ -127,6 +129,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         # every emitter shoots its own emission first, in pieces (and keeps what it received): the
         # light after those shots, less the sky's, is the direct light the lightmaps recompute per texel
         forced = emitter_pieces(scene, patches, effects.occlusion)
+        forced_power = sum((piece.power for piece in forced), np.zeros(3))  # emission not yet shot
         direct_light = recent_from = None
         completing = settings.complete_remainder and effects.interreflection and not direct_only and emitted_total > 0
         while True:
@@ -134,7 +137,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                 raise SolveCancelled("cancelled")
             with timer.stage("select"):
                 residuals = reader.read()
-            unshot_gpu = residuals.unshot
+            unshot_gpu = residuals.unshot + forced_power
             fraction_left = float(unshot_gpu.sum()) / emitted_total if emitted_total > 0 else 0.0
             elapsed = time.perf_counter() - started
             if not forced:
@@ -168,14 +171,16 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             if room <= 0:
                 stop_reason = "max_shots"
                 break
-            if forced:  # emitters' own emission
+            bounce = not forced  # emitters' own emission sends no reflected light
+            if forced:
                 batch, forced = forced[:room], forced[room:]
+                forced_power = forced_power - sum((piece.power for piece in batch), np.zeros(3))
             else:
                 centroid = settings.shoot_from == "centroid"
                 batch = [shooters.shooter(int(p), residuals.mean[p], residuals.centroid[p] if centroid else None)
                          for p in chosen]
             ledger.pending = np.array([shooter.power for shooter in batch])
-            ledger.pending_bounce = not batch[0].keeps_residual  # emitters' own emission keeps the rest
+            ledger.pending_bounce = bounce
             with timer.stage("visibility"):
                 uniforms = visibility.prepare(batch)
             with timer.stage("shoot"):

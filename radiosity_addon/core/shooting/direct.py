@@ -49,29 +49,22 @@ def lamps_as_shooters(scene: Scene) -> list[Shooter]:
 
 def emitter_pieces(scene: Scene, patches: Patches, occlusion: bool = True,
                    budget: int = SOLVE_EMITTER_PIECES) -> list[Shooter]:
-    """The solve's shots of the emissive patches' own emission, strongest first, each patch in
+    """The solve's shots of the emitters' own emission (`emitting_polygons`, strongest first), in
     pieces so that the elements' shadows keep their penumbra: about `budget` pieces for the
-    fronts, as many for the backs that emit (8 x 8 at most each); whole where nothing occludes.
-    Each patch keeps the rest of its residual, and each piece takes its share (of the area) of the
-    emission off it."""
-    power = patches.area * patches.emission.sum(axis=1)
-    emitting = [int(p) for p in np.argsort(-power, kind="stable") if power[p] > 0]
-    fronts = int(np.count_nonzero(~patches.is_back[emitting])) if emitting else 0
+    polygons facing one way and as many for their backs (8 x 8 at most each); whole where nothing
+    occludes. They shoot for no patch: the emission is not in the residual (`ElementTextures`)."""
+    polygons = emitting_polygons(scene, patches)
+    power = [np.linalg.norm(np.cross(c[2] - c[0], c[3] - c[1])) / 2 * e.sum() for c, e, _, _ in polygons]
+    fronts = sum(1 for *_, back in polygons if not back)
     split = int(np.clip(np.sqrt(budget / max(fronts, 1)), 1, AREA_LAMP_MAX_SPLIT)) if occlusion else 1
-    pieces = []
-    for p in emitting:
-        shots = polygon_shooters(patches.corners[p], patches.emission[p], scene.diameter, patch=p, max_split=split)
-        total = sum(piece.area for piece in shots)
-        for piece in shots:
-            piece.keeps_residual, piece.residual_share = True, piece.area / total
-        pieces.extend(shots)
-    return pieces
+    return [piece for k in np.argsort(-np.asarray(power), kind="stable")
+            for piece in polygon_shooters(polygons[k][0], polygons[k][1], scene.diameter, max_split=split)]
 
 
-def emitting_polygons(scene: Scene, patches: Patches) -> list[tuple[np.ndarray, np.ndarray, int]]:
-    """(corners (4, 3), emission (3,), patch or -1) of what emits, for the lightmaps' direct light:
-    each side of an emissive surface whole when its patches all emit alike (the light does not
-    depend on how refinement split it), else its patches one by one (a textured emission)."""
+def emitting_polygons(scene: Scene, patches: Patches) -> list[tuple[np.ndarray, np.ndarray, int, bool]]:
+    """(corners (4, 3), emission (3,), patch or -1, a back) of what emits: each side of an
+    emissive surface whole when its patches all emit alike (its light does not depend on how
+    refinement split it), else its patches one by one (a textured emission)."""
     emitting = np.flatnonzero(np.any(patches.emission > 0, axis=1))
     side = patches.surface[emitting] * 2 + patches.is_back[emitting]
     order = np.argsort(side, kind="stable")
@@ -84,9 +77,9 @@ def emitting_polygons(scene: Scene, patches: Patches) -> list[tuple[np.ndarray, 
             corners = scene.corners[surface:surface + 1]
             if patches.is_back[group[0]]:
                 corners = reversed_corners(corners, scene.corner_count[surface:surface + 1] == 3)
-            polygons.append((corners[0], emission[0], -1))
+            polygons.append((corners[0], emission[0], -1, bool(patches.is_back[group[0]])))
         else:
-            polygons.extend((patches.corners[p], patches.emission[p], int(p)) for p in group)
+            polygons.extend((patches.corners[p], patches.emission[p], int(p), bool(patches.is_back[p])) for p in group)
     return polygons
 
 
@@ -95,7 +88,7 @@ def direct_shooters(scene: Scene, patches: Patches) -> list[Shooter]:
     (one piece each when there are more than MAX_SPLIT_EMITTERS of them)."""
     polygons = emitting_polygons(scene, patches)
     size = scene.diameter if len(polygons) <= MAX_SPLIT_EMITTERS else np.inf
-    return lamps_as_shooters(scene) + [piece for corners, emission, patch in polygons
+    return lamps_as_shooters(scene) + [piece for corners, emission, patch, _ in polygons
                                        for piece in polygon_shooters(corners, emission, size, patch=patch)]
 
 

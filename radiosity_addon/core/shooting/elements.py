@@ -101,11 +101,13 @@ class ElementLayout:
 
 
 class ElementTextures:
-    """The light and residual textures of one solve: no light gathered yet, the emission unshot.
+    """The light and residual textures of one solve: no light gathered yet, the emission unshot
+    (or, with `unshot_emission` False, nothing: the caller shoots the emitters' own emission itself).
     `channels` 3: RGBA32F texels; 1 (a grey scene): R32F texels holding the one channel
     (the shaders' vec4 math then carries zeros in g, b, a)."""
 
-    def __init__(self, res: Resources, patches: Patches, elements: int, gutter: int = GUTTER, channels: int = 3):
+    def __init__(self, res: Resources, patches: Patches, elements: int, gutter: int = GUTTER, channels: int = 3,
+                 unshot_emission: bool = True):
         ctx = res.ctx
         self.ctx = ctx
         self.channels = channels
@@ -114,7 +116,8 @@ class ElementTextures:
         self.layout = layout = ElementLayout(len(patches), elements, gutter)
         self.areas = element_areas(patches, elements)  # (P, S, S) float64
         self.weights = self.areas * elements ** 2 / patches.area[:, None, None]  # a_e S^2 / A
-        emission = np.broadcast_to(self.emission[:, None, None, :], (len(patches), elements, elements, 3))
+        emission = np.broadcast_to(self.emission[:, None, None, :] * float(unshot_emission),
+                                   (len(patches), elements, elements, 3))
         components = 4 if channels == 3 else 1
         texels = lambda a: (np.concatenate([a, np.zeros(a.shape[:-1] + (1,))], axis=-1)  # noqa: E731
                             if components == 4 else a[..., :1])

@@ -27,10 +27,6 @@ class Shooter:
     spot_cos_half: float = -1.0  # -1: no cone
     spot_smooth: float = 0.0
     ortho_extent: float = 0.0  # > 0: orthographic visibility map (sun)
-    keeps_residual: bool = False  # the patch shoots only `radiosity` and keeps the rest of its residual
-    # of an emitter shot in pieces, the share of `radiosity` this piece takes off its patch's
-    # residual (its share of the area: the pieces together take the emission off once)
-    residual_share: float = 1.0
 
     @property
     def power(self) -> np.ndarray:

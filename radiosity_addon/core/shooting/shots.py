@@ -30,8 +30,7 @@ def shot_records(shooters: list[Shooter], slots: list[int]) -> np.ndarray:
         records[k, 0] = (*shooter.position, shooter.area)
         records[k, 1] = (*x, shooter.kind)
         records[k, 2] = (*y, shooter.patch)
-        # w: 0 clears the patch's residual; > 0 takes radiosity x (w - 1) off it (keeps the rest)
-        records[k, 3] = (*pole, 1.0 + shooter.residual_share if shooter.keeps_residual else 0.0)
+        records[k, 3] = (*pole, 0.0)
         records[k, 4:8, :3] = shooter.polygon
         records[k, 8, :3] = shooter.radiosity
         records[k, 9] = (*shooter.light_direction, shooter.spot_cos_half)
