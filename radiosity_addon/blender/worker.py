@@ -140,7 +140,8 @@ class BakeWorker:
     def _handle(self, message: dict) -> None:
         kind = message["kind"]
         if kind == "progress":
-            self.clock.solving(message["fraction"], message["message"], message.get("eta"))
+            self.clock.solving(message["fraction"], message["message"], message.get("eta"),
+                              own_estimate=message.get("own_estimate", False))
         elif kind == "stage":
             self.clock.laying_out_lightmaps()
         elif kind == "preview":

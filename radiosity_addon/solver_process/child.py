@@ -82,8 +82,10 @@ class Solve:
         if now - self.last_progress >= PROGRESS_INTERVAL or fraction >= 1.0:
             self.last_progress = now
             eta = (details or {}).get("eta")
+            # a solver that estimates its own time left (progressive refinement) says so even while
+            # it has no estimate yet: its fraction is not linear in time and must not be extrapolated
             self.pipe.send("progress", fraction=float(fraction), message=str(message),
-                           eta=None if eta is None else float(eta))
+                           eta=None if eta is None else float(eta), own_estimate="eta" in (details or {}))
 
     def preview(self, scene, settings, objects, gpu):
         def show(snapshot) -> None:
