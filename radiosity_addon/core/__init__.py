@@ -32,8 +32,8 @@ solve(scene, settings=None, progress=None, should_cancel=None, gpu=None, preview
     settings       SolveSettings (None: the defaults the command line and the panel share):
                    method "progressive" | "hemicube"; subdiv N (every surface N x N) or, with
                    subdiv None, patch_size (scene units); elements S (S x S per patch,
-                   progressive); hemicube_res; solver "jacobi-gpu" | "jacobi-cpu" |
-                   "gauss-seidel"; tolerance (None: the method's default); max_iterations;
+                   progressive); hemicube_res; solver "gauss-seidel" (default) |
+                   "jacobi-gpu" | "jacobi-cpu"; tolerance (None: the method's default); max_iterations;
                    max_shots; visibility, visibility_res, kernel, shoot_from (progressive);
                    memory_limit_bytes (the hemi-cube matrix guard); skip_unneeded (simulate
                    only the effects the scene analysis finds).

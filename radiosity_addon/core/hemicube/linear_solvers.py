@@ -92,14 +92,16 @@ def jacobi_cpu(form_factors, reflectance, emission, monitor: Convergence) -> np.
 def gauss_seidel(form_factors, reflectance, emission, monitor: Convergence, block: int = GAUSS_SEIDEL_BLOCK):
     """Point Gauss-Seidel, computed a block of rows at a time: within a block the strictly
     lower part is solved exactly with precomputed inverses of (I - rho L), so the result
-    is the same as row-by-row Gauss-Seidel without a Python loop over rows."""
-    matrix = np.asarray(form_factors, dtype=np.float64)
+    is the same as row-by-row Gauss-Seidel without a Python loop over rows. The matrix stays
+    in its own precision (float32 from the hemi-cubes: a float64 copy would double the memory the
+    guard allowed); each block of rows is widened as it is used, the sums are float64."""
+    matrix = np.asarray(form_factors)
     count = len(matrix)
     starts = range(0, count, block)
     lowers, inverses = [], []
     for start in starts:
         stop = min(start + block, count)
-        lower = np.tril(matrix[start:stop, start:stop], -1)
+        lower = np.tril(matrix[start:stop, start:stop].astype(np.float64), -1)
         # one inverse per channel: (3, b, b)
         system = np.eye(stop - start)[None] - reflectance[start:stop].T[:, :, None] * lower[None]
         lowers.append(lower)
