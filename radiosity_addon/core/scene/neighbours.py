@@ -1,50 +1,74 @@
-"""Pairs of nearby things without comparing all pairs: a uniform grid over centres, each query
-looking in the 27 cells around its own. Cost: O(N + pairs found), not O(N^2)."""
+"""Pairs of nearby things without comparing all pairs: uniform grids over centres, each query
+looking in the 27 cells around its own. Things of very different sizes get grids of their own
+(size classes a factor CLASS_RATIO apart): one big patch would otherwise set the cell size for
+all, and a room's thousands of small patches would share a few cells, O(N^2) candidates. Per
+pair of classes the cell is the largest reach plus the largest radius in them, so a query meets
+others of its own size or larger within a cell or two of it. Cost: O(N + pairs found) times the
+number of class pairs (a few dozen), not O(N^2)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 PAIR_CHUNK = 1 << 20  # candidate pairs expanded at once
+CLASS_RATIO = 4.0  # sizes within a class differ by at most this factor
 
 
-def _cell_keys(cells: np.ndarray) -> np.ndarray:
-    """int64 key per integer cell (N, 3); cells are shifted to be non-negative first."""
-    span = cells.max(axis=0) + 3
+def _cell_keys(cells: np.ndarray, span: np.ndarray) -> np.ndarray:
+    """int64 key per integer cell (N, 3) of non-negative cells below `span`."""
     return (cells[:, 0] * span[1] + cells[:, 1]) * span[2] + cells[:, 2]
+
+
+def _size_classes(sizes: np.ndarray) -> np.ndarray:
+    return np.floor(np.log(np.maximum(sizes, 1e-12)) / np.log(CLASS_RATIO)).astype(np.int64)
 
 
 def near_pairs(centre: np.ndarray, radius: np.ndarray, queries: np.ndarray, reach: np.ndarray):
     """Yield chunks (query positions into `queries`, other indices) of every pair whose centres are
     closer than reach[query] + radius[other]; the query itself is included."""
     centre = np.asarray(centre, dtype=np.float64)
-    if len(queries) == 0:
+    queries = np.asarray(queries)
+    if len(queries) == 0 or len(centre) == 0:
         return
-    cell = float(max(reach.max() + radius.max(), 1e-9))
-    low = centre.min(axis=0)
-    cells = np.floor((centre - low) / cell).astype(np.int64) + 1  # +1: neighbours of cell 0 stay >= 0
-    keys = _cell_keys(cells)
+    query_class, other_class = _size_classes(reach), _size_classes(radius)
+    for q_level in np.unique(query_class):
+        in_queries = np.flatnonzero(query_class == q_level)
+        for o_level in np.unique(other_class):
+            others = np.flatnonzero(other_class == o_level)
+            yield from _grid_pairs(centre, radius, queries, reach, in_queries, others)
+
+
+def _grid_pairs(centre, radius, queries, reach, positions, others):
+    """The pairs between queries[positions] and `others` through one grid."""
+    cell = float(max(reach[positions].max() + radius[others].max(), 1e-9))
+    low = centre[others].min(axis=0)
+    cells = np.floor((centre[others] - low) / cell).astype(np.int64) + 1  # +1: neighbours of cell 0 stay >= 0
     span = cells.max(axis=0) + 3
+    keys = _cell_keys(cells, span)
     order = np.argsort(keys, kind="stable")
     sorted_keys = keys[order]
-    query_cells = cells[queries]
+    query_cells = np.floor((centre[queries[positions]] - low) / cell).astype(np.int64) + 1
+    # queries outside the others' box by more than a cell meet nothing; clip the rest into the grid
+    inside = np.all((query_cells >= 0) & (query_cells <= span - 1), axis=1)
+    positions, query_cells = positions[inside], query_cells[inside]
     offsets = np.stack(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1], indexing="ij"), axis=-1).reshape(-1, 3)
     for offset in offsets:
         c = query_cells + offset
-        k = (c[:, 0] * span[1] + c[:, 1]) * span[2] + c[:, 2]
+        valid = np.all((c >= 0) & (c < span), axis=1)
+        k = np.where(valid, _cell_keys(c, span), -1)
         lo = np.searchsorted(sorted_keys, k, side="left")
         hi = np.searchsorted(sorted_keys, k, side="right")
-        counts = hi - lo
+        counts = np.where(valid, hi - lo, 0)
         start = 0
-        while start < len(queries):
+        while start < len(positions):
             # as many queries as fit PAIR_CHUNK pairs (at least one)
             cumulative = np.cumsum(counts[start:])
             stop = start + max(1, int(np.searchsorted(cumulative, PAIR_CHUNK, side="right")))
             n = counts[start:stop]
             if n.sum():
-                query = np.repeat(np.arange(start, stop), n)
+                query = np.repeat(positions[start:stop], n)
                 first = np.repeat(lo[start:stop] - np.concatenate([[0], np.cumsum(n)[:-1]]), n)
-                other = order[first + np.arange(n.sum())]
+                other = others[order[first + np.arange(n.sum())]]
                 gap = np.linalg.norm(centre[other] - centre[queries[query]], axis=1)
                 close = gap < reach[query] + radius[other]
                 yield query[close], other[close]
