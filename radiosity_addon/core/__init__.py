@@ -27,7 +27,7 @@ Scene                  arrays of surfaces (`corners`, `reflectance`, `emission`,
 Solving
 -------
 solve(scene, settings=None, progress=None, should_cancel=None, gpu=None, preview=None,
-      preview_interval=2.0) -> Solution
+      preview_interval=2.0, timer=None) -> Solution
     scene          the Scene to solve.
     settings       SolveSettings (None: the defaults the command line and the panel share):
                    method "progressive" | "hemicube"; subdiv N (every surface N x N) or, with
@@ -46,6 +46,8 @@ solve(scene, settings=None, progress=None, should_cancel=None, gpu=None, preview
                    the radiosity so far plus the ambient term (Cohen et al. 1988), for display
                    only (its report is None); bake_lightmaps turns it into images. The
                    hemi-cube method has no intermediate result and never calls it.
+    timer          a StageTimer to time the stages with (None: a new one); a subclass may measure
+                   more per stage (the bench's scaling records peak memory).
 Solution               patches, patch_radiosity (P, 3), element_radiosity (P, S, S, 3) or None,
                        report (Report: `to_dict()` is the report file, `summary_line()` the
                        panel's one line).
@@ -100,12 +102,13 @@ from .settings import (CONTENTS, DEFAULT_TOLERANCE, KERNELS, MAX_LIGHTMAP_SIZE, 
                        LightmapSettings, SolveSettings)
 from .solution import Solution
 from .solve import solve
+from .timing import StageTimer
 from .uvspace import surfaces_with_material_maps
 
 __all__ = [
     "CONTENTS", "Camera", "Convergence", "DEFAULT_TOLERANCE", "GLUnavailable", "GPU", "KERNELS", "Lightmap", "LightmapSettings", "MAX_REFLECTANCE", "MaterialMap",
     "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "QUALITIES", "QUALITY_PRESETS", "SOLVE_METHODS", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
-    "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "Surface", "TEXEL_DENSITY",
+    "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "StageTimer", "Surface", "TEXEL_DENSITY",
     "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",
     "form_factor_matrix", "lightmap_sizes", "polygon_faults",
     "load_scene", "open_gpu", "point_to_polygon", "render_preview", "save_preview", "save_scene",

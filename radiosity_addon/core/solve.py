@@ -27,14 +27,15 @@ from .uvspace import patch_material_values, surfaces_with_material_maps
 
 
 def solve(scene: Scene, settings: SolveSettings | None = None, progress: ProgressCallback | None = None,
-          should_cancel=None, gpu: GPU | None = None, preview=None, preview_interval: float = 2.0) -> Solution:
+          should_cancel=None, gpu: GPU | None = None, preview=None, preview_interval: float = 2.0,
+          timer: StageTimer | None = None) -> Solution:
     """Solve radiosity for `scene` (see core/__init__.py for the parameters)."""
     settings = settings or SolveSettings()
     settings.validate()
     if not scene.material_maps:  # refuse before any GPU work (with maps, once they are read)
         check_has_emitter(scene)
     started = time.perf_counter()
-    timer = StageTimer()
+    timer = timer if timer is not None else StageTimer()
     with open_gpu(gpu) as solve_gpu:
         if scene.material_maps:  # textured materials: surfaces and patches take their texels' means
             with timer.stage("materials"):

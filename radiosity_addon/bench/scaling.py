@@ -1,0 +1,118 @@
+"""A furnished room (rooms.py) baked stage by stage as the add-on bakes it, each stage's seconds
+and peak memory recorded: what tools/measure_scaling.py plots against the room's size and what
+tests/test_scaling.py compares between two sizes.
+
+Stages: export (the evaluated meshes, lamps and world), material maps (Cycles' albedo and
+emission bakes), the core solve's own stages (analyse, subdivide, refine, direct light, shots or
+form factors and the linear solve, ...), lightmaps, and the write-back into the file. All run in
+this process (no solver child), so its memory is the solve's. A stage's peak memory is the
+resident set's high-water mark while it ran (Linux: /proc/self/clear_refs resets it when a stage
+starts; elsewhere the peak so far).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import re
+import time
+
+import bpy
+
+from .. import core
+from ..blender import apply
+from ..blender.bake import baked_materials, choose_objects
+from ..blender.export import export_scene
+from ..blender.headless import ensure_registered
+from ..blender.lights import render_lamps
+from . import rooms
+
+
+def high_water_mb() -> float:
+    """The resident set's peak since the last reset, MiB (0 where /proc is not there)."""
+    try:
+        with open("/proc/self/status") as status:
+            return int(re.search(r"VmHWM:\s+(\d+)", status.read()).group(1)) / 1024
+    except OSError:
+        return 0.0
+
+
+def reset_high_water() -> None:
+    with contextlib.suppress(OSError), open("/proc/self/clear_refs", "w") as refs:
+        refs.write("5")
+
+
+class Stages:
+    """Seconds and peak MiB per named stage. Stages may nest (refinement runs direct-light shots):
+    an inner stage's time and peak count in the stages around it too."""
+
+    def __init__(self):
+        self.seconds: dict[str, float] = {}
+        self.peak_mb: dict[str, float] = {}
+        self.open: list[str] = []
+
+    def _peak(self, names, value: float) -> None:
+        for name in names:
+            self.peak_mb[name] = max(self.peak_mb.get(name, 0.0), value)
+
+    @contextlib.contextmanager
+    def stage(self, name: str):
+        self._peak(self.open, high_water_mb())  # the enclosing stages' peak before the reset
+        reset_high_water()
+        self.open.append(name)
+        started = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[name] = self.seconds.get(name, 0.0) + time.perf_counter() - started
+            self.open.pop()
+            self._peak(self.open + [name], high_water_mb())
+
+
+class MeasuredTimer(core.StageTimer):
+    """The core's stage timer, recording each stage into `stages` too (with its peak memory)."""
+
+    def __init__(self, stages: Stages):
+        super().__init__()
+        self.stages = stages
+
+    @contextlib.contextmanager
+    def stage(self, name: str):
+        with self.stages.stage(name), super().stage(name):
+            yield
+
+
+def bake_room_in_stages(triangles: int, solve: dict, lightmaps: dict | None = None, material_maps: bool = True) -> dict:
+    """Build the room of `triangles` and bake all its meshes with the panel's settings and `solve`
+    (SolveSettings fields; a "quality" first sets its preset) and `lightmaps` replaced. Without
+    `material_maps` the surfaces keep their materials' mean colours (no Cycles bake)."""
+    built = rooms.build_room(triangles)
+    ensure_registered()
+    context = bpy.context
+    objects = choose_objects(context, [obj for obj in context.scene.objects if obj.type == "MESH"])
+    options = context.scene.radiosity.bake_options(objects).overridden(dict(solve), lightmaps)
+    stages = Stages()
+    started = time.perf_counter()
+    with stages.stage("export"):
+        exported = export_scene(context.evaluated_depsgraph_get(), objects, lamps=render_lamps(context.view_layer),
+                                world=context.scene.world)
+    scene, factors = exported.scene, {}
+    if material_maps:
+        with stages.stage("material maps"):
+            scene, factors = baked_materials(context, exported, objects, options)
+    with core.open_gpu() as gpu:
+        solution = core.solve(scene, options.solve, gpu=gpu, timer=MeasuredTimer(stages))
+        with stages.stage("lightmaps"):
+            lightmaps_made = core.bake_lightmaps(scene, solution, options.lightmaps, gpu=gpu,
+                                                 objects=list(exported.baked_objects))
+            images = {name: lightmap.filled_image() for name, lightmap in lightmaps_made.items()}
+    with stages.stage("write-back"):
+        written = apply.write_images(images, "PACK", None)
+        apply.show_lightmaps(objects, written, options.lightmaps.content, factors)
+    report = solution.report.to_dict()
+    stages.seconds.pop("total", None)
+    stages.peak_mb.pop("total", None)
+    return {"triangles_target": triangles, "triangles": built["triangles"], "method": report["method"],
+            "patches": report["counts"]["patches"], "elements": report["counts"].get("elements"),
+            "shots": report.get("shots"), "why": (report.get("method_choice") or {}).get("reason"),
+            "seconds": time.perf_counter() - started, "stage_seconds": stages.seconds,
+            "stage_peak_mb": stages.peak_mb, "texels": int(sum(i.shape[0] * i.shape[1] for i in images.values()))}

@@ -1,0 +1,97 @@
+"""How each stage of a bake grows with the scene: seconds and peak memory per stage on the
+benchmark's furnished rooms (radiosity_addon/bench/rooms.py) from ~1k to ~100k triangles.
+
+    .venv/bin/python tools/measure_scaling.py --output-dir out/scaling \\
+        [--triangles 1000 4000 16000 64000 100000] [--methods auto] [--quality draft] [--timeout 1800]
+
+Every (room, method) runs in a process of its own, which builds the room and bakes it stage by
+stage as the add-on does (radiosity_addon/bench/scaling.py: export, material maps, the core
+solve's stages, lightmaps, write-back), each stage's seconds and peak resident memory recorded.
+Writes DIR/scaling.json, and DIR/scaling.png (seconds and peak memory per stage against
+triangles, log-log).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+
+def plot(path: Path, runs: list[dict]) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8))
+    for method in dict.fromkeys(run["method_asked"] for run in runs):
+        done = sorted((run for run in runs if run["method_asked"] == method and "stage_seconds" in run),
+                      key=lambda run: run["triangles"])
+        names = list(dict.fromkeys(name for run in done for name in run["stage_seconds"]))
+        for name in names:
+            points = [(run["triangles"], run["stage_seconds"].get(name), run["stage_peak_mb"].get(name)) for run in done
+                      if name in run["stage_seconds"]]
+            x = [p[0] for p in points]
+            left.plot(x, [max(p[1], 1e-3) for p in points], marker="o", label=f"{name}")
+            right.plot(x, [p[2] for p in points], marker="o", label=f"{name}")
+        left.plot([run["triangles"] for run in done], [run["seconds"] for run in done], "k--", marker="s",
+                  label=f"whole bake ({method})")
+    for axis, label in ((left, "seconds"), (right, "peak resident memory, MiB")):
+        axis.set_xscale("log")
+        axis.set_yscale("log")
+        axis.set_xlabel("triangles")
+        axis.set_ylabel(label)
+        axis.grid(True, which="both", alpha=0.3)
+    left.legend(fontsize=7, ncol=2)
+    left.set_title("time per stage")
+    right.set_title("peak memory per stage")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--output-dir", type=Path, required=True)
+    parser.add_argument("--triangles", type=int, nargs="+", default=[1000, 4000, 16000, 64000, 100000])
+    parser.add_argument("--methods", nargs="+", default=["auto"])
+    parser.add_argument("--quality", default="draft")
+    parser.add_argument("--timeout", type=float, default=1800.0, help="seconds per bake before it is stopped")
+    parser.add_argument("--one", nargs=2, metavar=("TRIANGLES", "METHOD"), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.one:
+        from radiosity_addon.bench.scaling import bake_room_in_stages
+        print(json.dumps(bake_room_in_stages(int(args.one[0]), {"quality": args.quality, "method": args.one[1]}),
+                         default=float))
+        return 0
+    out = args.output_dir
+    out.mkdir(parents=True, exist_ok=True)
+    runs = []
+    for method in args.methods:
+        for triangles in args.triangles:
+            command = [sys.executable, __file__, "--output-dir", str(out), "--quality", args.quality,
+                       "--one", str(triangles), method]
+            started = time.perf_counter()
+            try:
+                done = subprocess.run(command, capture_output=True, text=True, timeout=args.timeout)
+                lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
+                run = json.loads(lines[-1]) if done.returncode == 0 and lines else \
+                    {"triangles_target": triangles, "failed": done.stderr.strip().splitlines()[-3:]}
+            except subprocess.TimeoutExpired:
+                run = {"triangles_target": triangles, "failed": f"stopped after {args.timeout:.0f} s"}
+            run.update(method_asked=method, wall_seconds=time.perf_counter() - started, load_average=os.getloadavg())
+            runs.append(run)
+            print(json.dumps(run, default=float), flush=True)
+            (out / "scaling.json").write_text(json.dumps(runs, indent=1, default=float))
+    plot(out / "scaling.png", runs)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
