@@ -1,0 +1,146 @@
+"""The quality presets (or any settings) against Cycles on a .blend, texel by texel: what the
+README's "Quality presets" tables are measured with.
+
+    .venv/bin/python tools/measure_presets.py FILE.blend --output-dir out/presets \\
+        --runs '{"quality": "draft"}' '{"quality": "good", "method": "hemicube"}' \\
+        [--reference 256] [--cycles 16 64]
+
+FILE is baked as its author made it. Meshes without a 'Lightmap' UV map get one first, made by
+the add-on's own Lightmap Pack, saved as DIR/<name>.blend: every bake and Cycles' reference use
+that copy, so both fill the same texels. Each run is the add-on's headless bake with the file's
+settings and the run's replaced (content: combined, B), timed as a whole; the reference is Cycles'
+Combined bake at `--reference` samples per seed, two seeds (bench/blend_reference.py, cached in
+DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, timed when baked. The comparison
+(bench/compare.py) gives the texel RMS over all texels and over those inside the room (a room of
+bench/rooms.py; elsewhere the same), and the worst object's mean. `--densities` then times the
+first run and Cycles at the first `--cycles` samples at other texel densities. Writes
+DIR/presets.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import bpy  # noqa: E402
+
+from radiosity_addon.bench import blend_lightmaps, blend_reference, compare  # noqa: E402
+from radiosity_addon.bench.rooms import ROOM_PROPERTY  # noqa: E402
+from radiosity_addon.blender.headless import HeadlessBake, bake_file, ensure_registered  # noqa: E402
+from radiosity_addon.blender.lightmap_uv import add_lightmap_uvs  # noqa: E402
+
+
+def log(message: str) -> None:
+    print(f"[{time.strftime('%H:%M:%S')}] {message}", file=sys.stderr, flush=True)
+
+
+def with_lightmap_uvs(source: Path, target: Path) -> tuple[Path, bool]:
+    """The file with a 'Lightmap' UV map on every mesh (a copy when some lacked one); is it a room?"""
+    bpy.ops.wm.open_mainfile(filepath=str(source.resolve()), load_ui=False)
+    ensure_registered()
+    meshes = [obj for obj in bpy.context.scene.objects if obj.type == "MESH"]
+    is_room = ROOM_PROPERTY in bpy.context.scene
+    if not add_lightmap_uvs(bpy.context, meshes, bpy.context.scene.radiosity.uv_margin):
+        return source, is_room
+    target.parent.mkdir(parents=True, exist_ok=True)
+    bpy.ops.wm.save_as_mainfile(filepath=str(target.resolve()))
+    return target, is_room
+
+
+def label_of(run: dict) -> str:
+    return " ".join(f"{key}={value}" for key, value in run.items()) or "file's settings"
+
+
+def density_sweep(path: Path, run: dict, samples: int, densities: list[float], out: Path) -> list[dict]:
+    """Seconds of our bake (`run`) and of Cycles at `samples` per texel density: our texels come
+    from the solve's patches (their cost is the lightmap stage's), Cycles' each cost samples."""
+    rows = []
+    print(f"| texels per unit | texels | {label_of(run)} | Cycles {samples} samples |")
+    print("|---:|---:|---:|---:|")
+    for density in densities:
+        started = time.perf_counter()
+        directory = out / f"density{density:g}"
+        bake_file(HeadlessBake(str(path), solve_options=run, output_dir=str(directory),
+                               lightmap_options={"content": "combined", "texel_density": density}))
+        ours = time.perf_counter() - started
+        names = [obj.name for obj in bpy.context.scene.objects if obj.type == "MESH"]
+        sizes = blend_lightmaps.sizes_of(blend_lightmaps.read_lightmaps(directory, names))
+        cycles = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, 1, out / "cache")["seconds"]
+        texels = sum(w * h for w, h in sizes.values())
+        rows.append({"texel_density": density, "texels": texels, "ours_seconds": ours, "cycles_seconds": cycles})
+        print(f"| {density:g} | {texels} | {ours:.1f} s | {cycles:.1f} s |", flush=True)
+    return rows
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("file", type=Path)
+    parser.add_argument("--output-dir", type=Path, required=True)
+    parser.add_argument("--runs", nargs="+", default=['{"quality": "draft"}', '{"quality": "good"}', '{"quality": "final"}'],
+                        help="JSON objects of SolveSettings fields (a 'quality' first sets its preset)")
+    parser.add_argument("--reference", type=int, default=256, help="Cycles samples per seed of the reference (two seeds)")
+    parser.add_argument("--cycles", type=int, nargs="*", default=[16, 64], help="Cycles' own rows, at these samples")
+    parser.add_argument("--densities", type=float, nargs="*", default=[],
+                        help="then time the first run and Cycles at the first --cycles samples at these texel"
+                             " densities (texels per unit): how each one's cost grows with the lightmaps' texels")
+    args = parser.parse_args()
+    out = args.output_dir
+    out.mkdir(parents=True, exist_ok=True)
+    path, is_room = with_lightmap_uvs(args.file, out / args.file.name)
+    record: dict = {"file": str(args.file), "baked": str(path), "machine": {"cpus": os.cpu_count()}, "runs": []}
+
+    lightmaps = {}
+    for k, text in enumerate(args.runs):
+        run = json.loads(text)
+        load = os.getloadavg()[0]
+        started = time.perf_counter()
+        _, report = bake_file(HeadlessBake(str(path), solve_options=run, lightmap_options={"content": "combined"},
+                                           output_dir=str(out / f"run{k}")))
+        seconds = time.perf_counter() - started
+        names = [obj.name for obj in bpy.context.scene.objects if obj.type == "MESH"]
+        lightmaps[k] = blend_lightmaps.read_lightmaps(out / f"run{k}", names)
+        record["runs"].append({"label": label_of(run), "settings": run, "seconds": seconds, "load_average": load,
+                               "method": report["method"], "patches": report["counts"]["patches"],
+                               "solve_seconds": report["timings"]["total"], "shots": report.get("shots")})
+        log(f"{label_of(run)}: {report['method']}, {report['counts']['patches']} patches, {seconds:.1f} s")
+
+    sizes = blend_lightmaps.sizes_of(lightmaps[0])
+    reference = blend_reference.reference_with_noise(path, sizes, "combined", args.reference, cache_dir=out / "cache")
+    positions, _ = blend_lightmaps.texel_geometry(sizes)
+    inside = blend_lightmaps.inside_room(positions) if is_room else None
+    texels = compare.common_texels(reference["images"], reference["images"], inside)
+    record["reference"] = {"samples_per_seed": args.reference,
+                           "noise": compare.relative_noise(reference["noise"], reference["images"], texels)}
+    rows = [(entry, lightmaps[k]) for k, entry in enumerate(record["runs"])]
+    for samples in args.cycles:
+        bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, 1, out / "cache")
+        entry = {"label": f"Cycles {samples} samples", "seconds": bake["seconds"], "method": "cycles"}
+        record["runs"].append(entry)
+        rows.append((entry, bake["images"]))
+    print(f"reference: Cycles {args.reference} samples x 2 seeds, noise {100 * record['reference']['noise']:.1f} %")
+    print("| run | method | patches | seconds | texel RMS all / inside | worst object mean |")
+    print("|---|---|---:|---:|---:|---|")
+    for entry, images in rows:
+        result = compare.compare(images, reference["images"], inside)
+        worst, error = result["worst_object"]
+        entry.update(texel_rms=result["texel_rms"], texel_rms_inside=result.get("texel_rms_inside", result["texel_rms"]),
+                     worst_object=worst, worst_object_error=error,
+                     objects={name: e["relative_rgb"] for name, e in result["objects"].items()})
+        print(f"| {entry['label']} | {entry['method']} | {entry.get('patches', '')} | {entry['seconds']:.1f} "
+              f"| {100 * entry['texel_rms']:.1f} % / {100 * entry['texel_rms_inside']:.1f} % "
+              f"| {worst} {100 * error:+.0f} % |", flush=True)
+    if args.densities:
+        record["densities"] = density_sweep(path, json.loads(args.runs[0]), args.cycles[0], args.densities, out)
+    (out / "presets.json").write_text(json.dumps(record, indent=1, default=float))
+    log(f"wrote {out / 'presets.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
