@@ -25,6 +25,7 @@ from .uvspace import patch_material_values
 
 REFINE_FLOOR = 0.05
 PROBE_ELEMENTS = 4  # elements per patch side the direct light is measured on
+PROBE_EMITTER_PIECES = 64  # the emitters' pieces in the probe (the solve's 256: its penumbrae need not be as fine)
 GAP_RESOLUTION = 2.0  # patches facing another surface closely are split down to this many gaps
 SMALLEST_PATCH = 1 / 1024  # of the scene's diameter: no split below it
 REFINE_MIN_PATCHES = 2000  # the spread rule may add this many patches whatever the scene's size
@@ -162,7 +163,8 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
     refined = []
     for level in range(settings.refinements):
         with timer.stage("refine"):
-            _, _, light, _, _ = solve_progressive(gpu, scene, patches, probe, effects, StageTimer(), direct_only=True)
+            _, _, light, _, _ = solve_progressive(gpu, scene, patches, probe, effects, StageTimer(), direct_only=True,
+                                                  emitter_pieces_budget=PROBE_EMITTER_PIECES)
             min_size = SMALLEST_PATCH * scene.diameter
             priority = patches_to_refine(patches, light, settings.refine_threshold, min_size, scene.corners,
                                          settings.emitter_gap_resolution)
