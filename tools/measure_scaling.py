@@ -35,12 +35,14 @@ def plot(path: Path, runs: list[dict]) -> None:
         done = sorted((run for run in runs if run["method_asked"] == method and "stage_seconds" in run),
                       key=lambda run: run["triangles"])
         names = list(dict.fromkeys(name for run in done for name in run["stage_seconds"]))
-        for name in names:
+        colours = plt.get_cmap("tab20")
+        for k, name in enumerate(names):
             points = [(run["triangles"], run["stage_seconds"].get(name), run["stage_peak_mb"].get(name)) for run in done
                       if name in run["stage_seconds"]]
             x = [p[0] for p in points]
-            left.plot(x, [max(p[1], 1e-3) for p in points], marker="o", label=f"{name}")
-            right.plot(x, [p[2] for p in points], marker="o", label=f"{name}")
+            style = {"marker": "o", "color": colours(k % 20), "linestyle": ("-", "--", ":")[k // 7 % 3]}
+            left.plot(x, [max(p[1], 1e-3) for p in points], label=f"{name}", **style)
+            right.plot(x, [p[2] for p in points], label=f"{name}", **style)
         left.plot([run["triangles"] for run in done], [run["seconds"] for run in done], "k--", marker="s",
                   label=f"whole bake ({method})")
     for axis, label in ((left, "seconds"), (right, "peak resident memory, MiB")):
@@ -64,7 +66,11 @@ def main() -> int:
     parser.add_argument("--quality", default="draft")
     parser.add_argument("--timeout", type=float, default=1800.0, help="seconds per bake before it is stopped")
     parser.add_argument("--one", nargs=2, metavar=("TRIANGLES", "METHOD"), help=argparse.SUPPRESS)
+    parser.add_argument("--replot", action="store_true", help="only redraw DIR/scaling.png from DIR/scaling.json")
     args = parser.parse_args()
+    if args.replot:
+        plot(args.output_dir / "scaling.png", json.loads((args.output_dir / "scaling.json").read_text()))
+        return 0
     if args.one:
         from radiosity_addon.bench.scaling import bake_room_in_stages
         print(json.dumps(bake_room_in_stages(int(args.one[0]), {"quality": args.quality, "method": args.one[1]}),
