@@ -37,36 +37,6 @@ uniform int residual_tiles_per_row;
 
 shared uint group_energy[4 * MAX_SHOTS];
 
-#if KERNEL_EXACT
-const int NEAR_SUBSAMPLES = 4;  // per element side, where the kernel varies across the element
-const float NEAR_HEIGHT = 1.0;  // "near": the element's centre within its own size of the shooter's plane
-
-// A polygon shooter's factor over element (p, i, j): its value at the centre (f, visibility
-// included), or near the shooter's plane, where it varies across the element, its mean over
-// NEAR_SUBSAMPLES^2 points (the centre's visibility kept). The centre alone gave an emitter's piece
-// 2 cm under a ceiling 3.6 times the power it sends. The rule depends on the plane only, so the
-// pieces of one polygon still sum to the polygon's own factor.
-float element_factor(int k, int p, int i, int j, vec3 x, vec3 n, float f, float share) {
-    float height = dot(x - shots[k].corner[0].xyz, shots[k].normal_w.xyz);
-    if (f <= 0.0 || height > NEAR_HEIGHT * sqrt(share)) {
-        return f;
-    }
-    vec3 polygon[4] = vec3[4](shots[k].corner[0].xyz, shots[k].corner[1].xyz, shots[k].corner[2].xyz,
-                              shots[k].corner[3].xyz);
-    float sum = 0.0;
-    for (int b = 0; b < NEAR_SUBSAMPLES; ++b) {
-        for (int a = 0; a < NEAR_SUBSAMPLES; ++a) {
-            float s = (float(i) + (float(a) + 0.5) / float(NEAR_SUBSAMPLES)) / float(ELEMENTS);
-            float t = (float(j) + (float(b) + 0.5) / float(NEAR_SUBSAMPLES)) / float(ELEMENTS);
-            vec3 y = bilinear_point(corner[4 * p].xyz, corner[4 * p + 1].xyz, corner[4 * p + 2].xyz,
-                                    corner[4 * p + 3].xyz, s, t);
-            sum += polygon_form_factor(polygon, y, n);
-        }
-    }
-    return sum / float(NEAR_SUBSAMPLES * NEAR_SUBSAMPLES);
-}
-#endif
-
 void main() {
     const int per_patch = ELEMENTS * ELEMENTS;
     int id = int(gl_LocalInvocationID.x);
@@ -105,11 +75,6 @@ void main() {
             int kind = int(shots[k].axis_x_kind.w);
             // the sky's visibility is already in each element's sky fraction
             float f = shot_factor(k, x, n, plane, kind == 3 ? sky_fraction[e] : 0.0);
-#if KERNEL_EXACT
-            if (kind == 0) {
-                f = element_factor(k, p, i, j, x, n, f, share);
-            }
-#endif
 #if RECORD_VISIBILITY
             if (k == 0) {
                 visibility_out[e] = kind == 3 ? 1.0 : float(shot_sees(0, x, n, plane));
