@@ -109,8 +109,6 @@ def bake_room_in_stages(triangles: int, solve: dict, lightmaps: dict | None = No
         written = apply.write_images(images, "PACK", None)
         apply.show_lightmaps(objects, written, options.lightmaps.content, factors)
     report = solution.report.to_dict()
-    stages.seconds.pop("total", None)
-    stages.peak_mb.pop("total", None)
     return {"triangles_target": triangles, "triangles": built["triangles"], "method": report["method"],
             "patches": report["counts"]["patches"], "elements": report["counts"].get("elements"),
             "shots": report.get("shots"), "why": (report.get("method_choice") or {}).get("reason"),

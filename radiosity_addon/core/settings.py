@@ -52,7 +52,7 @@ class SolveSettings:
     elements: int = 4  # S x S elements per patch (progressive), S a power of two
     hemicube_res: int = 128  # pixels across the hemi-cube's top face
     hemicube_elements: int = 2  # hemi-cube method: S x S receiving elements (hemi-cubes) per patch
-    solver: str = "gauss-seidel"  # converges in fewer sweeps than Jacobi; on llvmpipe 9x faster than jacobi-gpu (4k-patch room)
+    solver: str = "gauss-seidel"  # fewer sweeps than Jacobi (docs/architecture.md: measured on llvmpipe)
     tolerance: float | None = None  # None: the method's default
     max_iterations: int = 100_000  # linear solvers
     max_shots: int | None = None  # progressive; None: as many as the tolerance needs
