@@ -51,6 +51,8 @@ SOLVER_OPTIONS = [
      "progressive: add the light the power still unshot at the stop would deliver"),
     ("--kernel", "kernel", {"choices": KERNELS},
      "progressive form-factor kernel: exact point-to-polygon or the disk approximation"),
+    ("--shooter-clusters", "shooter_clusters", {"type": int, "metavar": "C"},
+     "progressive: with more patches than C, weak light shoots from about C clusters of patches (0: never)"),
 ]
 
 

@@ -68,7 +68,9 @@ void main() {
         visibility_out[e] = 0.0;
 #endif
         for (int k = 0; k < shot_count; ++k) {
-            if (int(shots[k].axis_y_patch.w) == p) {
+            int level = int(shots[k].extra.w + 0.5);
+            int shooter = level > 0 ? plane_of[p].id[level] : p;  // a cluster shoots all its members
+            if (int(shots[k].axis_y_patch.w) == shooter) {
                 unshot = vec4(0.0);  // the shot leaves the shooter's residual
                 continue;
             }

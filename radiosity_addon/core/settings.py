@@ -62,6 +62,7 @@ class SolveSettings:
     batch_shots: int = 32  # progressive: shooters per pass at most (hemi-cube visibility)
     complete_remainder: bool = True  # progressive: the light the power unshot at the stop would deliver, added (laid out like the last shots')
     shoot_from: str = "centroid"  # progressive: visibility map from the unshot power's centroid | centre
+    shooter_clusters: int = 2048  # progressive: with more patches than this, weak ones shoot in about this many clusters (0: never)
     memory_limit_bytes: int = 2 << 30  # hemi-cube form-factor matrix guard
     skip_unneeded: bool = True  # simulate only the effects the scene calls for (scene.analysis)
     refinements: int = 5  # rounds of splitting patches where the direct light changes fast, before the solve
@@ -107,6 +108,8 @@ class SolveSettings:
             raise SolveError("tolerance must lie between 0 and 1")
         if not 1 <= self.batch_shots <= 64:
             raise SolveError("shooters per pass must lie between 1 and 64")
+        if self.shooter_clusters < 0:
+            raise SolveError("shooter clusters must not be negative (0: every patch shoots alone)")
         if not 0 <= self.refinements <= 8 or not self.refine_threshold > 0:
             raise SolveError("refinements must lie between 0 and 8, the refine threshold above 0")
         if not self.refine_budget >= 0:

@@ -25,17 +25,18 @@ const float HIDING_MARGIN = 1e-3;  // of the eye-receiver distance: a plane near
 struct Shot {
     vec4 eye_area;        // the visibility eye, the polygon's area
     vec4 axis_x_kind;     // the eye's frame: x, and the kind
-    vec4 axis_y_patch;    // y, and the patch shot (-1: none)
+    vec4 axis_y_patch;    // y, and the patch shot (-1: none), or the cluster shot when extra.w > 0
     vec4 normal_w;        // the pole (a polygon's normal)
     vec4 corner[4];       // the polygon, counter-clockwise seen from its front
     vec4 radiosity;       // what it shoots
     vec4 spot;            // the lamp's axis or the sun's travel direction, cos of half the cone (-2: none)
-    vec4 extra;           // the cone's soft width, the hemi-cube slot (-1: the map), the sun map's half-width
+    vec4 extra;           // the cone's soft width, the hemi-cube slot (-1: the map), the sun map's half-width,
+                          // the level (1-3) of the cluster of patches shot (all its members), 0: none
 };
 
 layout(std140, binding = UNIFORM_SHOTS) uniform Shots { Shot shots[MAX_SHOTS]; };
 // per patch: its plane's equation (n, n . x), the id of that plane (a surface side), its corners
-struct PatchPlane { vec4 equation; ivec4 id; vec4 corner[4]; };
+struct PatchPlane { vec4 equation; ivec4 id; vec4 corner[4]; };  // id: plane, shooter clusters at levels 1-3
 layout(std430, binding = STORAGE_PATCH_PLANE) readonly buffer Plane { PatchPlane plane_of[]; };
 layout(binding = TEXTURE_HEMICUBES) uniform usampler2D hemicubes;
 layout(binding = TEXTURE_ITEM_BUFFER) uniform usampler2D item_buffer;

@@ -27,6 +27,7 @@ from ..shooting import (SOLVE_EMITTER_PIECES, DirectLightWork, ElementTextures, 
                         emitter_pieces, patch_means, shoot_lamps, shoot_sky)
 from ..timing import StageTimer
 from ..visibility import VARIANTS
+from .clusters import ClusteredSelection, build_clusters
 from .ledger import EnergyLedger, ambient_term, remainder_light, remainder_power, time_left
 from .selection import READBACK, ResidualReader
 
@@ -44,6 +45,8 @@ class ProgressiveWork:
     texel_bytes: int
     residual_updates: bool
     direct: DirectLightWork
+    shooter_clusters: int = 0  # clusters the patches were grouped into (0: none)
+    cluster_shots: int = 0  # shots of a whole cluster (counted in `shots`)
 
     def entries(self) -> dict:
         return {k: v for k, v in asdict(self).items() if k != "direct"} | asdict(self.direct)
@@ -95,12 +98,18 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
     ledger = EnergyLedger(emitted)
     ambient = ambient_term(patches)
     shooters = PatchShooters(patches)
+    clusters = None
+    if 0 < settings.shooter_clusters < len(patches) and effects.interreflection and not direct_only:
+        with timer.stage("clusters"):
+            objects = np.unique([surface.object_name for surface in scene.surfaces], return_inverse=True)[1]
+            clusters = build_clusters(patches, settings.shooter_clusters, owner=objects.ravel()[patches.surface])
     with gpu.resources() as res:
         with timer.stage("setup"):
             # the emitters' own emission is not in the residual: their pieces below shoot it
             textures = ElementTextures(res, patches, settings.elements, channels=effects.channels,
                                        unshot_emission=False)
-            buffers = PatchBuffers(res, patches, textures)
+            buffers = PatchBuffers(res, patches, textures,
+                                   None if clusters is None else np.stack([c.of_patch for c in clusters], axis=1))
             visibility = ShotVisibility(res, patches, settings.visibility_res, settings.visibility, scene.diameter,
                                         effects.occlusion, capacity=settings.batch_shots)
             shooting = ShootingPass(res, textures, buffers, settings.kernel, visibility,
@@ -118,6 +127,10 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         lamp_first_bounce = np.maximum(first.unshot, 0.0)
         ledger.emitted = ledger.emitted + lamp_first_bounce
         emitted_total = float(ledger.emitted.sum())
+        # a cluster shoots as one while its power is under CLUSTER_POWER mean clusters' shares of the light
+        # (clusters.ClusteredSelection)
+        selection = None if clusters is None else ClusteredSelection(patches, clusters, emitted_total)
+        cluster_shots = 0
 
         shots = batches = 0
         # (seconds since the emitters shot, unshot fraction) for the estimate of time left: the
@@ -164,7 +177,13 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                     and fraction_left <= REMAINDER_WINDOW * tolerance:
                 recent_from = textures.read_light()  # what is gathered from here on shapes the remainder
             room = min(visibility.capacity, max_shots - shots)
-            chosen = residuals.strongest(room) if not forced else None
+            grouped = []
+            if forced:
+                chosen = None
+            elif selection is not None:
+                chosen, grouped = selection.choose(residuals, room)
+            else:
+                chosen = residuals.strongest(room)
             done = direct_only or fraction_left <= tolerance or emitted_total <= 0 or not residuals.power.max() > 0
             if not forced and done:
                 stop_reason = "direct light" if direct_only else stop_reason
@@ -179,7 +198,8 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
             else:
                 centroid = settings.shoot_from == "centroid"
                 batch = [shooters.shooter(int(p), residuals.mean[p], residuals.centroid[p] if centroid else None)
-                         for p in chosen]
+                         for p in chosen] + grouped
+                cluster_shots += len(grouped)
             ledger.pending = np.array([shooter.power for shooter in batch])
             ledger.pending_bounce = bounce
             with timer.stage("visibility"):
@@ -218,6 +238,8 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         shots_per_second=shots / solve_seconds if solve_seconds > 0 else None,
         work=ProgressiveWork(visibility_maps=visibility.maps_rendered, shots=shots, batches=batches, channels_solved=effects.channels,
                              texel_bytes=16 if effects.channels == 3 else 4,
-                             residual_updates=bool(effects.interreflection), direct=direct),
+                             residual_updates=bool(effects.interreflection), direct=direct,
+                             shooter_clusters=0 if clusters is None else len(clusters[-1]),
+                             cluster_shots=cluster_shots),
     )
     return patch_radiosity, elements, light, direct_light, details

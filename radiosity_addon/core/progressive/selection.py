@@ -29,13 +29,19 @@ class Residuals:
     def strongest(self, count: int, floor: float = BATCH_POWER_FLOOR) -> np.ndarray:
         """Up to `count` patches of largest unshot power, strongest first, none under `floor` times
         the strongest's (empty when nothing is left to shoot)."""
-        top = float(self.power.max()) if len(self.power) else 0.0
-        if top <= 0 or count <= 0:
-            return np.zeros(0, dtype=np.int64)
-        count = min(count, len(self.power))
-        candidates = np.argpartition(-self.power, count - 1)[:count]
-        candidates = candidates[np.argsort(-self.power[candidates], kind="stable")]
-        return candidates[self.power[candidates] >= floor * top]
+        return strongest(self.power, count, floor)
+
+
+def strongest(power: np.ndarray, count: int, floor: float = BATCH_POWER_FLOOR) -> np.ndarray:
+    """Indices of up to `count` of the largest `power`, largest first, none under `floor` times the
+    largest (empty when nothing is above zero)."""
+    top = float(power.max()) if len(power) else 0.0
+    if top <= 0 or count <= 0:
+        return np.zeros(0, dtype=np.int64)
+    count = min(count, len(power))
+    candidates = np.argpartition(-power, count - 1)[:count]
+    candidates = candidates[np.argsort(-power[candidates], kind="stable")]
+    return candidates[power[candidates] >= floor * top]
 
 
 class ResidualReader:

@@ -21,12 +21,13 @@ class Shooter:
     polygon: np.ndarray  # (4, 3) corners, counter-clockwise from the front
     area: float
     radiosity: np.ndarray  # (3,) unshot radiosity being shot (a point lamp: intensity; a sun: irradiance)
-    patch: int = -1  # the patch whose residual this shot clears
+    patch: int = -1  # the patch whose residual this shot clears (a cluster's index when `cluster`)
     kind: int = POLYGON
     light_direction: tuple = (0.0, 0.0, -1.0)  # spot axis / sun travel direction
     spot_cos_half: float = -1.0  # -1: no cone
     spot_smooth: float = 0.0
     ortho_extent: float = 0.0  # > 0: orthographic visibility map (sun)
+    cluster: int = 0  # > 0: `patch` is a cluster of patches at this level (progressive.clusters), all of whose residuals it shoots
 
     @property
     def power(self) -> np.ndarray:

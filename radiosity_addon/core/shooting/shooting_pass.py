@@ -36,7 +36,8 @@ def dispatch(program, count: int) -> None:
 class PatchBuffers:
     """Per-patch and per-element storage buffers shared by the selection and shooting passes."""
 
-    def __init__(self, res: Resources, patches: Patches, textures: ElementTextures):
+    def __init__(self, res: Resources, patches: Patches, textures: ElementTextures,
+                 cluster_of: np.ndarray | None = None):
         pad = lambda a, w: np.concatenate([a, w], axis=-1).astype(np.float32)  # noqa: E731
         self.buffers = {
             "PATCH_CORNERS": res.buffer(pad(patches.corners, np.zeros((len(patches), 4, 1))).tobytes()),
@@ -44,7 +45,7 @@ class PatchBuffers:
             "PATCH_REFLECTANCE": res.buffer(pad(patches.reflectance, np.zeros((len(patches), 1))).tobytes()),
             "ELEMENT_WEIGHTS": res.buffer(textures.weights.astype(np.float32).tobytes()),
             "SHOT_ENERGY": res.buffer(reserve=16 * MAX_SHOTS),  # per shot: hit, reflected RGB
-            "PATCH_PLANE": res.buffer(patch_planes(patches)),
+            "PATCH_PLANE": res.buffer(patch_planes(patches, cluster_of)),
         }
         self.buffers["SHOT_ENERGY"].clear()
 

@@ -34,18 +34,23 @@ def shot_records(shooters: list[Shooter], slots: list[int]) -> np.ndarray:
         records[k, 4:8, :3] = shooter.polygon
         records[k, 8, :3] = shooter.radiosity
         records[k, 9] = (*shooter.light_direction, shooter.spot_cos_half)
-        records[k, 10] = (shooter.spot_smooth, slot, shooter.ortho_extent, 0.0)
+        records[k, 10] = (shooter.spot_smooth, slot, shooter.ortho_extent, float(shooter.cluster))
     return records
 
 
-def patch_planes(patches: Patches) -> bytes:
+def patch_planes(patches: Patches, cluster_of: np.ndarray | None = None) -> bytes:
     """shot.glsl's PatchPlane per patch: its plane's equation (n, n . x) as float32, its plane id
-    (patches of one side of a surface are coplanar: a visibility lookup accepts any of them), its
-    four corners (a triangle repeats its last)."""
+    (patches of one side of a surface are coplanar: a visibility lookup accepts any of them) and
+    its shooter clusters (`cluster_of` (P, levels ≤ 3), -1 without), its four corners (a triangle
+    repeats its last)."""
     equation = np.concatenate([patches.normal, np.einsum("pd,pd->p", patches.normal, patches.center)[:, None]],
                               axis=1).astype(np.float32)
     ids = np.zeros((len(patches), 4), dtype=np.int32)
     ids[:, 0] = patches.plane
+    ids[:, 1:] = -1
+    if cluster_of is not None:
+        cluster_of = np.asarray(cluster_of).reshape(len(patches), -1)
+        ids[:, 1:1 + cluster_of.shape[1]] = cluster_of
     corners = np.concatenate([patches.corners, np.zeros((len(patches), 4, 1))], axis=2).astype(np.float32)
     return np.concatenate([equation.view(np.int32), ids, corners.reshape(len(patches), 16).view(np.int32)],
                           axis=1).tobytes()

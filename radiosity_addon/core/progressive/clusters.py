@@ -1,0 +1,192 @@
+"""Clusters of patches that shoot as one (clustering, Smits et al. 1994), so that the number of
+shots stops growing with the number of patches.
+
+Progressive refinement's cost is shots × receiving elements. Without clusters every patch that
+holds a share of the light shoots, so shots grow with the patches and the solve with their square.
+Here the patches are grouped once per solve into about `target` clusters: patches of one object
+whose centres share a cell of a uniform grid, whose normals share a bin (an octahedral grid of
+NORMAL_BINS × NORMAL_BINS over directions, about 20° wide) and whose planes lie within a slab of
+PLANE_SLAB cells. The cell size is the smallest of a
+geometric series that gives at most `target` clusters, so the clusters' count, and with it the
+number of shots a tolerance needs, depends on the scene's extent, not on its tessellation.
+
+A cluster shoots the sum of its members' unshot power as one polygon: a rectangle in the plane of
+its eye patch (the member nearest the centroid of the members' unshot power), along that patch's
+edges, with the centroid and variances of that power (so a strip of patches shoots as a strip,
+and a half-lit cluster from its lit half), seen from the eye patch's visibility map. Every member's residual is cleared by the
+shot and no member receives from it. That is exact for far receivers and approximate within about
+a cell of the cluster, so only weak clusters shoot as one (`Selection`): those whose power is below
+`CLUSTER_POWER` × the mean cluster power of the light emitted. Strong ones (the sun's patch on the
+floor, a wall beside a lamp) shoot patch by patch, as before.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..scene import Patches
+from ..scene.geometry import tangent_frames
+from ..shooting import Shooter
+from .selection import strongest
+
+NORMAL_BINS = 8  # per side of the octahedral grid of normal directions
+CELL_GROWTH = 1.25  # ratio between the cell sizes tried
+CLUSTER_POWER = 1.0  # a cluster shoots as one below this many mean cluster powers of the emitted light
+CLUSTER_LEVELS = 3  # nested levels of clusters, each cell twice the next finer one's
+PLANE_SLAB = 0.125  # members lie within this many cells of one plane (a painting and the wall behind it part)
+
+
+def octahedral_bins(normals: np.ndarray, bins: int = NORMAL_BINS) -> np.ndarray:
+    """(P,) bin of each unit normal on an octahedral grid of bins × bins."""
+    n = normals / np.abs(normals).sum(axis=1, keepdims=True)
+    u, v = n[:, 0].copy(), n[:, 1].copy()
+    lower = n[:, 2] < 0
+    u[lower], v[lower] = ((1 - np.abs(n[lower, 1])) * np.sign(n[lower, 0] + 1e-30),
+                          (1 - np.abs(n[lower, 0])) * np.sign(n[lower, 1] + 1e-30))
+    i = np.clip(((u + 1) / 2 * bins).astype(np.int64), 0, bins - 1)
+    j = np.clip(((v + 1) / 2 * bins).astype(np.int64), 0, bins - 1)
+    return j * bins + i
+
+
+def cluster_keys(centers: np.ndarray, normals: np.ndarray, normal_bin: np.ndarray, owner: np.ndarray,
+                 cell: float) -> np.ndarray:
+    """(P,) cluster index of each patch for grid cells of side `cell` (indices 0 .. C-1): same
+    cell, same normal bin, same `owner` (object), and planes within PLANE_SLAB cells (a box's
+    face and the wall behind it do not cluster)."""
+    cells = np.floor((centers - centers.min(axis=0)) / cell).astype(np.int64)
+    offset = np.floor((normals * centers).sum(axis=1) / (PLANE_SLAB * cell)).astype(np.int64)
+    keys = np.concatenate([cells, normal_bin[:, None], offset[:, None], owner[:, None]], axis=1)
+    return np.unique(keys, axis=0, return_inverse=True)[1].ravel()
+
+
+@dataclass
+class PatchClusters:
+    of_patch: np.ndarray  # (P,) cluster of each patch
+    members: np.ndarray  # (C,) member counts
+    by_cluster: np.ndarray  # (P,) patch indices grouped by cluster: cluster c's are [starts[c], starts[c + 1])
+    starts: np.ndarray  # (C + 1,)
+    cell: float  # the grid's cell side
+
+    def __len__(self) -> int:
+        return len(self.members)
+
+    def power(self, patch_power: np.ndarray) -> np.ndarray:
+        """(C,) summed over members."""
+        return np.bincount(self.of_patch, weights=patch_power, minlength=len(self))
+
+    def members_of(self, cluster: int) -> np.ndarray:
+        return self.by_cluster[self.starts[cluster]:self.starts[cluster + 1]]
+
+
+def build_clusters(patches: Patches, target: int, owner: np.ndarray | None = None,
+                   levels: int = CLUSTER_LEVELS) -> list[PatchClusters]:
+    """`levels` nested levels of clusters, finest first; the coarsest has about `target` clusters
+    at most (fewer when the patches are fewer), each finer one cells half as wide. O(P log P).
+    Patches of different `owner`s (P,) (their objects: a book and the shelf it stands in) never
+    cluster."""
+    centers = patches.center
+    normal_bin = octahedral_bins(patches.normal)
+    owner = np.zeros(len(patches), dtype=np.int64) if owner is None else np.asarray(owner, dtype=np.int64)
+    extent = float(np.max(centers.max(axis=0) - centers.min(axis=0))) if len(patches) else 0.0
+    cell = max(extent, 1e-6) / 64
+    of_patch = cluster_keys(centers, patches.normal, normal_bin, owner, cell)
+    while of_patch.max(initial=-1) + 1 > target and cell < 4 * extent:
+        cell *= CELL_GROWTH
+        of_patch = cluster_keys(centers, patches.normal, normal_bin, owner, cell)
+    result = []
+    for k in reversed(range(levels)):
+        size = cell / 2 ** k  # the same origin: a cell's halves nest in it, as do the slabs
+        of_patch = cluster_keys(centers, patches.normal, normal_bin, owner, size)
+        members = np.bincount(of_patch)
+        result.append(PatchClusters(of_patch=of_patch, members=members, by_cluster=np.argsort(of_patch, kind="stable"),
+                                    starts=np.concatenate([[0], np.cumsum(members)]), cell=size))
+    return result
+
+
+def spread_rectangle(center: np.ndarray, x: np.ndarray, y: np.ndarray, points: np.ndarray, area: np.ndarray,
+                     weight: np.ndarray):
+    """The rectangle along x and y (the eye patch's edges: a grid of patches stays inside it) with
+    the centroid and variances of `weight`ed squares of `area` at `points` in the plane (center;
+    x, y), cut to the squares' extent (a steep gradient must not push it past the members):
+    (its centre, its two half sides)."""
+    weight = weight / weight.sum()
+    reach = 0.5 * np.sqrt(area)  # half a member's side
+    middle, sides = center, []
+    for axis in (x, y):
+        along = (points - center) @ axis
+        mean = weight @ along
+        # a uniform rectangle of side s has the variance s²/12, a member square of area A A/12
+        half = 0.5 * np.sqrt(12 * (weight @ ((along - mean) ** 2 + area / 12.0)))
+        low, high = max(mean - half, float((along - reach).min())), min(mean + half, float((along + reach).max()))
+        middle = middle + 0.5 * (low + high) * axis
+        sides.append(0.5 * (high - low) * axis)
+    return middle, sides[0], sides[1]
+
+
+class ClusterShooters:
+    """Clusters as shooters (`Shooter.cluster`): a rectangle with the spread of the members'
+    unshot power, on the plane of the member nearest its centroid, seen from that member."""
+
+    def __init__(self, patches: Patches, clusters: PatchClusters, level: int = 1):
+        self.clusters, self.level = clusters, level
+        self.center, self.normal, self.area = patches.center, patches.normal, patches.area
+        self.edge = patches.corners[:, 1] - patches.corners[:, 0]
+
+    def shooter(self, cluster: int, power: np.ndarray, patch_power: np.ndarray) -> Shooter:
+        """Cluster `cluster` shooting `power` (3,) (its members' unshot power; `patch_power` (P,)
+        places it)."""
+        members = self.clusters.members_of(cluster)
+        weight = patch_power[members]
+        weight = weight if weight.sum() > 0 else self.area[members]
+        centroid = (weight @ self.center[members]) / weight.sum()
+        eye = int(members[np.argmin(np.linalg.norm(self.center[members] - centroid, axis=1))])
+        normal = self.normal[eye]
+        _, x, y, _ = tangent_frames(self.center[eye:eye + 1], normal[None], self.edge[eye:eye + 1])
+        center = centroid - np.dot(centroid - self.center[eye], normal) * normal  # onto the eye's plane
+        center, a, b = spread_rectangle(center, x[0], y[0], self.center[members], self.area[members], weight)
+        polygon = np.array([center - a - b, center + a - b, center + a + b, center - a + b])  # counter-clockwise
+        area = 4.0 * float(np.linalg.norm(a) * np.linalg.norm(b))
+        return Shooter(position=self.center[eye], axes=(x[0], y[0], normal), polygon=polygon, area=area,
+                       radiosity=np.asarray(power, dtype=np.float64) / area, patch=cluster, cluster=self.level)
+
+
+class ClusteredSelection:
+    """The next shooters when patches cluster, in `levels` (finest first, each nested in the next):
+    each patch shoots with the coarsest of its clusters that is weak — two members or more, power
+    under CLUSTER_POWER × the emitted light / that level's cluster count — or alone when none is;
+    the strongest of these candidates shoot. A strong coarse cluster thus splits into finer ones
+    before it splits into patches."""
+
+    def __init__(self, patches: Patches, levels: list[PatchClusters], emitted: float):
+        self.levels = levels
+        self.thresholds = [CLUSTER_POWER * emitted / len(level) for level in levels]
+        self.area = patches.area
+        self.shooters = [ClusterShooters(patches, level, k) for k, level in enumerate(levels, start=1)]
+
+    def choose(self, residuals, count: int) -> tuple[np.ndarray, list[Shooter]]:
+        """(patches that shoot alone, strongest first; the clusters' shooters)."""
+        unit_level = np.zeros(len(self.area), dtype=np.int64)
+        powers = []
+        for k, (level, threshold) in enumerate(zip(self.levels, self.thresholds), start=1):
+            power = level.power(residuals.power)
+            weak = (power < threshold) & (level.members >= 2)
+            unit_level = np.where(weak[level.of_patch], k, unit_level)  # coarser levels override
+            powers.append(power)
+        candidates = [np.where(unit_level == 0, residuals.power, 0.0)]
+        for k, (level, power) in enumerate(zip(self.levels, powers), start=1):
+            unit = np.zeros(len(level), dtype=bool)
+            unit[level.of_patch[unit_level == k]] = True
+            candidates.append(np.where(unit, power, 0.0))
+        offsets = np.cumsum([0] + [len(c) for c in candidates])
+        chosen = strongest(np.concatenate(candidates), count)
+        alone = chosen[chosen < offsets[1]]
+        shooters = []
+        for index in chosen[chosen >= offsets[1]]:
+            k = int(np.searchsorted(offsets, index, side="right")) - 1  # its level
+            cluster = int(index - offsets[k])
+            members = self.levels[k - 1].members_of(cluster)
+            power = self.area[members] @ residuals.mean[members]
+            shooters.append(self.shooters[k - 1].shooter(cluster, power, residuals.power))
+        return alone, shooters
