@@ -119,12 +119,19 @@ def test_escape_in_the_modal_loop_cancels_and_leaves_the_file_unchanged(monkeypa
     assert support.blend_state() == before
 
 
+def quick_progressive(context) -> None:
+    """Fewer elements and a loose tolerance: previews still come every 0.2 s, the bake ends sooner."""
+    context.scene.radiosity.elements = "2"
+    context.scene.radiosity.tolerance = 0.05
+
+
 def preview_images():
     return sorted(image.name for image in bpy.data.images if image.name.endswith(PREVIEW_SUFFIX))
 
 
 def test_live_preview_shows_the_light_building_up_then_the_final_images_replace_it():
     context = support.open_blend(support.CORNELL, method="progressive", subdivision=3)
+    quick_progressive(context)
     objects = sorted(obj.name for obj in context.selected_objects)
     bake = ButtonBake(context, preview_interval=0.2)
     snapshots = []
@@ -163,6 +170,7 @@ def test_a_solid_viewport_gets_no_preview_it_could_not_show():
 
 def test_cancel_after_a_preview_restores_an_earlier_bake_and_unbaked_objects_exactly():
     context = support.open_blend(support.CORNELL, method="progressive", subdivision=3)
+    quick_progressive(context)
     meshes = list(context.selected_objects)
     support.select_only([bpy.data.objects["floor"]])
     assert bpy.ops.radiosity.bake() == {"FINISHED"}  # the floor shows an earlier bake, the rest none
