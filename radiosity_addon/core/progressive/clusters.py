@@ -3,21 +3,22 @@ shots stops growing with the number of patches.
 
 Progressive refinement's cost is shots × receiving elements. Without clusters every patch that
 holds a share of the light shoots, so shots grow with the patches and the solve with their square.
-Here the patches are grouped once per solve into about `target` clusters: patches of one object
-whose centres share a cell of a uniform grid, whose normals share a bin (an octahedral grid of
-NORMAL_BINS × NORMAL_BINS over directions, about 20° wide) and whose planes lie within a slab of
-PLANE_SLAB cells. The cell size is the smallest of a
-geometric series that gives at most `target` clusters, so the clusters' count, and with it the
-number of shots a tolerance needs, depends on the scene's extent, not on its tessellation.
+Here the patches are grouped once per solve into CLUSTER_LEVELS nested levels of clusters:
+patches of one object whose centres share a cell of a uniform grid, whose normals share a bin (an
+octahedral grid of NORMAL_BINS × NORMAL_BINS over directions, about 20° wide) and whose planes lie
+within a slab of PLANE_SLAB cells. The coarsest cell is the smallest of a geometric series that
+gives at most `target` clusters (so their count depends on the scene's extent, not on its
+tessellation); each finer level halves it.
 
 A cluster shoots the sum of its members' unshot power as one polygon: a rectangle in the plane of
 its eye patch (the member nearest the centroid of the members' unshot power), along that patch's
 edges, with the centroid and variances of that power (so a strip of patches shoots as a strip,
-and a half-lit cluster from its lit half), seen from the eye patch's visibility map. Every member's residual is cleared by the
-shot and no member receives from it. That is exact for far receivers and approximate within about
-a cell of the cluster, so only weak clusters shoot as one (`Selection`): those whose power is below
-`CLUSTER_POWER` × the mean cluster power of the light emitted. Strong ones (the sun's patch on the
-floor, a wall beside a lamp) shoot patch by patch, as before.
+and a half-lit cluster from its lit half), seen from the eye patch's visibility map. Every
+member's residual is cleared by the shot and no member receives from it. That is exact for far
+receivers and approximate within about a cell, so only weak clusters shoot as one
+(`ClusteredSelection`): a patch shoots with the coarsest of its clusters whose power is under
+CLUSTER_POWER × the emitted light / that level's cluster count, or alone (the sun's patch on the
+floor, a wall beside a lamp).
 """
 
 from __future__ import annotations
