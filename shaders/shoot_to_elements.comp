@@ -76,7 +76,7 @@ void main() {
             }
             int kind = int(shots[k].axis_x_kind.w);
             // the sky's visibility is already in each element's sky fraction
-            float f = shot_factor(k, x, n, plane, kind == 3 ? sky_fraction[e] : 0.0);
+            float f = shot_factor(k, x, n, plane, HAS_KIND(3) && kind == 3 ? sky_fraction[e] : 0.0);
 #if RECORD_VISIBILITY
             if (k == 0) {
                 visibility_out[e] = kind == 3 ? 1.0 : float(shot_sees(0, x, n, plane));

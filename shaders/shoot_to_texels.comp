@@ -4,6 +4,10 @@
 //   H += sum_k B_k * F(texel point -> shooter k) * V,
 // F and V as the shooting pass over elements computes them ("shot"). A texel carries the world
 // point its centre shows (on the patch whose UV footprint holds it), its normal and its plane.
+// The pieces of one emitting polygon (a group) are there for their visibility: the group sends
+//   B * F(texel -> whole polygon) * sum_k w_k V_k / sum_k w_k,  w_k = F_disk(texel -> piece k),
+// Lambert's exact factor once per polygon instead of once per piece (the costly part), exact
+// wherever all or none of the pieces are seen, and the penumbra weighted piece by piece.
 #include "bindings"
 #include "constants"
 #include "kernels"
@@ -16,6 +20,8 @@ layout(std430, binding = STORAGE_TEXEL_PLANE) readonly buffer TexelPlane { int t
 layout(std430, binding = STORAGE_TEXEL_LIGHT) buffer Light { vec4 texel_light[]; };
 
 uniform int texel_count;
+uniform int single_count;  // shots [0, single_count) are not pieces of a group
+uniform int group_count;  // groups of pieces after them (group_corner: corners, .w of the first two: first, end)
 
 void main() {
     // rows of work groups beyond 65535 (the portable limit per dimension) go to y
@@ -27,9 +33,24 @@ void main() {
     vec3 n = texel_normal[t].xyz;
     int plane = texel_plane[t];
     vec3 gathered = vec3(0.0);
-    for (int k = 0; k < shot_count; ++k) {
-        float f = shot_factor(k, x, n, plane, 0.0);
-        gathered += shots[k].radiosity.rgb * f;
+    // the shots that are not pieces of a group come first (TexelReceivers orders them so), each
+    // with its own factor; separate loops, so that no lane runs the other's code
+    for (int k = 0; k < single_count; ++k) {
+        gathered += shots[k].radiosity.rgb * shot_factor(k, x, n, plane, 0.0);
+    }
+    for (int g = 0; g < group_count; ++g) {
+        int first = int(group_corner[4 * g].w), end = int(group_corner[4 * g + 1].w);
+        float seen = 0.0, weights = 0.0;
+        for (int k = first; k < end; ++k) {
+            float w = disk_form_factor(shots[k].eye_area.xyz, shots[k].normal_w.xyz, shots[k].eye_area.w, x, n);
+            if (w > 0.0) {
+                weights += w;
+                seen += shot_sees(k, x, n, plane) ? w : 0.0;
+            }
+        }
+        vec3 polygon[4] = vec3[4](group_corner[4 * g].xyz, group_corner[4 * g + 1].xyz, group_corner[4 * g + 2].xyz,
+                                  group_corner[4 * g + 3].xyz);
+        gathered += shots[first].radiosity.rgb * polygon_form_factor(polygon, x, n) * (seen / max(weights, 1e-30));
     }
     if (gathered != vec3(0.0)) {
         texel_light[t] += vec4(gathered, 0.0);

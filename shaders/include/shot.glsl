@@ -14,6 +14,18 @@
 // Algorithm 8). OCCLUSION 0: the scene analysis proved nothing occludes.
 //
 // Defines: MAX_SHOTS, KERNEL_EXACT, SEARCH_RADIUS, OCCLUDER_MARGIN (the map's guard), OCCLUSION.
+//
+// SHOT_KINDS (a bit per kind present in the batch) and VISIBILITY_LOOKUP (1: hemi-cubes, 2: the
+// map, 3: either) compile a pass for what its batch holds: a software rasterizer (llvmpipe) runs
+// both sides of every branch its SIMD lanes may take, so code for absent kinds would cost as
+// much as code for present ones. The passes pick the variant per batch (ShotVisibility.prepare).
+#ifndef SHOT_KINDS
+#define SHOT_KINDS 15
+#endif
+#ifndef VISIBILITY_LOOKUP
+#define VISIBILITY_LOOKUP 3
+#endif
+#define HAS_KIND(kind) ((SHOT_KINDS & (1 << (kind))) != 0)
 
 // HIDE_BEHIND_OCCLUDERS (both passes set it): a receiver behind the patch its pixel shows is
 // hidden, never searched past
@@ -26,7 +38,8 @@ struct Shot {
     vec4 eye_area;        // the visibility eye, the polygon's area
     vec4 axis_x_kind;     // the eye's frame: x, and the kind
     vec4 axis_y_patch;    // y, and the patch shot (-1: none), or the cluster shot when extra.w > 0
-    vec4 normal_w;        // the pole (a polygon's normal)
+    vec4 normal_w;        // the pole (a polygon's normal), and its group: 1 + the index of the whole polygon
+                          // it is a piece of (group_corner), 0 for none
     vec4 corner[4];       // the polygon, counter-clockwise seen from its front
     vec4 radiosity;       // what it shoots
     vec4 spot;            // the lamp's axis or the sun's travel direction, cos of half the cone (-2: none)
@@ -34,7 +47,8 @@ struct Shot {
                           // the level (1-3) of the cluster of patches shot (all its members), 0: none
 };
 
-layout(std140, binding = UNIFORM_SHOTS) uniform Shots { Shot shots[MAX_SHOTS]; };
+// after the records, the corners of each group's whole polygon (shots.piece_groups)
+layout(std140, binding = UNIFORM_SHOTS) uniform Shots { Shot shots[MAX_SHOTS]; vec4 group_corner[4 * MAX_SHOTS]; };
 // per patch: its plane's equation (n, n . x), the id of that plane (a surface side), its corners
 struct PatchPlane { vec4 equation; ivec4 id; vec4 corner[4]; };  // id: plane, shooter clusters at levels 1-3
 layout(std430, binding = STORAGE_PATCH_PLANE) readonly buffer Plane { PatchPlane plane_of[]; };
@@ -168,26 +182,40 @@ bool shot_sees(int k, vec3 x, vec3 n, int plane) {
 #if !OCCLUSION
     return true;
 #endif
+#if VISIBILITY_LOOKUP == 1
+    return hemicube_sees(int(shots[k].extra.y), q, plane, shots[k].eye_area.xyz, d);
+#elif VISIBILITY_LOOKUP == 2
+    return map_sees(q, plane, shots[k].extra.z);
+#else
     int slot = int(shots[k].extra.y);
     return slot >= 0 ? hemicube_sees(slot, q, plane, shots[k].eye_area.xyz, d) : map_sees(q, plane, shots[k].extra.z);
+#endif
 }
 
 // F times V of shot k at x; `sky` is the receiver's sky fraction (kind 3: its visibility is in it).
 float shot_factor(int k, vec3 x, vec3 n, int plane, float sky) {
     int kind = int(shots[k].axis_x_kind.w);
+#if HAS_KIND(3)
     if (kind == 3) {
         return sky;
     }
+#endif
     if (!shot_sees(k, x, n, plane)) {
         return 0.0;
     }
+#if HAS_KIND(1)
     if (kind == 1) {
         return point_lamp_factor(shots[k].eye_area.xyz, shots[k].spot.xyz, shots[k].spot.w, shots[k].extra.x, x, n);
     }
+#endif
+#if HAS_KIND(2)
     if (kind == 2) {
         return max(-dot(n, shots[k].spot.xyz), 0.0) / PI;
     }
-#if KERNEL_EXACT
+#endif
+#if !HAS_KIND(0)
+    return 0.0;
+#elif KERNEL_EXACT
     vec3 polygon[4] = vec3[4](shots[k].corner[0].xyz, shots[k].corner[1].xyz, shots[k].corner[2].xyz,
                               shots[k].corner[3].xyz);
     return polygon_form_factor(polygon, x, n);

@@ -51,6 +51,9 @@ def polygon_shooters(corners: np.ndarray, radiance: np.ndarray, scene_diameter: 
     pieces = bilinear(corners[None], s0.ravel()[:, None] + offsets[:, 0], t0.ravel()[:, None] + offsets[:, 1])[0]
     x_axis = tangent_frame(normal, corners[1] - corners[0])
     areas = np.linalg.norm(0.5 * np.cross(pieces[:, 2] - pieces[:, 0], pieces[:, 3] - pieces[:, 1]), axis=1)
+    count = int((areas > 0).sum())
+    whole = np.array(corners, dtype=np.float64) if count > 1 else None
     return [Shooter(position=piece.mean(axis=0), axes=(*x_axis, normal), polygon=piece, area=float(area),
-                    radiosity=np.asarray(radiance, dtype=np.float64), kind=POLYGON, patch=patch)
+                    radiosity=np.asarray(radiance, dtype=np.float64), kind=POLYGON, patch=patch, whole=whole,
+                    pieces=count)
             for piece, area in zip(pieces, areas) if area > 0]

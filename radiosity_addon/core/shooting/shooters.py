@@ -28,6 +28,8 @@ class Shooter:
     spot_smooth: float = 0.0
     ortho_extent: float = 0.0  # > 0: orthographic visibility map (sun)
     cluster: int = 0  # > 0: `patch` is a cluster of patches at this level (progressive.clusters), all of whose residuals it shoots
+    whole: np.ndarray | None = None  # (4, 3): the emitting polygon this is one of `pieces` pieces of (None: whole)
+    pieces: int = 1
 
     @property
     def power(self) -> np.ndarray:

@@ -65,11 +65,11 @@ class ShootingPass:
         self.res, self.ctx, self.textures, self.buffers = res, res.ctx, textures, buffers
         self.visibility_source = visibility
         layout = textures.layout
-        self.program = res.gpu.compute("shoot_to_elements.comp", defines={
+        self.defines = {
             "ELEMENT_FORMAT": textures.image_format, "ELEMENTS": layout.elements, "GUTTER": layout.gutter,
             "KERNEL_EXACT": int(kernel == "exact"), "RECORD_VISIBILITY": int(record_visibility),
             "INTERREFLECTION": int(interreflection), "HIDE_BEHIND_OCCLUDERS": 1, **visibility.defines,
-        })
+        }
         self.element_count = layout.patch_count * layout.elements ** 2
         self.layout_uniforms = {"patch_count": layout.patch_count, "padded_tiles_per_row": layout.padded_tiles_per_row,
                                 "residual_tiles_per_row": layout.residual_tiles_per_row}
@@ -81,14 +81,17 @@ class ShootingPass:
 
     def gather(self, uniforms: dict) -> None:
         """The dispatch for the batch the visibility has prepared (`ShotVisibility.prepare`)."""
-        set_uniforms(self.program, {**self.layout_uniforms, **uniforms})
+        source = self.visibility_source  # the variant for what the batch holds (compiled once each)
+        program = self.res.gpu.compute("shoot_to_elements.comp", defines={
+            **self.defines, "SHOT_KINDS": source.batch_kinds, "VISIBILITY_LOOKUP": source.batch_lookup})
+        set_uniforms(program, {**self.layout_uniforms, **uniforms})
         self.buffers.bind()
         if self.visibility is not None:
             self.visibility.bind_to_storage_buffer(storage("RECORDED_VISIBILITY"))
         self.textures.light.bind_to_image(image_unit("LIGHT"), read=True, write=True)
         self.textures.residual.bind_to_image(image_unit("RESIDUAL"), read=True, write=True, level=0)
         self.ctx.memory_barrier()
-        dispatch(self.program, self.element_count)
+        dispatch(program, self.element_count)
         self.ctx.memory_barrier()
 
     def shoot_all(self, shooters: list[Shooter]) -> int:

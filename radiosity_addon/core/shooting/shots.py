@@ -17,25 +17,59 @@ from ..scene import Patches
 from ..visibility import VARIANTS, HemicubeAtlas, VisibilityMap
 from .shooters import DIRECTIONAL, SKY, Shooter
 
-MAX_SHOTS = 64  # records per uniform block: 64 x 176 bytes, within GL's 16 KiB guarantee
+MAX_SHOTS = 64  # records per uniform block: 64 x (176 + 64) bytes, within GL's 16 KiB guarantee
 SHOT_VEC4S = 11  # vec4s per record (struct Shot)
+GROUP_VEC4S = 4  # vec4s per group of pieces (the whole polygon's corners), after the records
 MAX_HEMICUBE_RESOLUTION = 1024  # a hemi-cube's top face, in pixels (its tile is 3 x taller)
 
 
+def piece_groups(shooters: list[Shooter]) -> tuple[np.ndarray, list[np.ndarray]]:
+    """(len(shooters),) group of each shooter, 1 + an index into the list of the groups' whole
+    polygons (0: none): consecutive pieces of one polygon (`Shooter.whole`) that are all in
+    `shooters`, so that a pass can take the polygon's exact factor once and the pieces only for
+    visibility."""
+    groups = np.zeros(len(shooters), dtype=np.int64)
+    wholes = []
+    k = 0
+    while k < len(shooters):
+        whole, count = shooters[k].whole, shooters[k].pieces
+        if whole is not None and all(s.whole is whole for s in shooters[k:k + count]) and k + count <= len(shooters):
+            wholes.append(whole)
+            groups[k:k + count] = len(wholes)
+            k += count
+        else:
+            k += 1
+    return groups, wholes
+
+
+def singles_then_groups(shooters: list[Shooter]) -> list[Shooter]:
+    """`shooters` reordered: those in no group first, then the groups (`piece_groups`), as the
+    texel pass reads them."""
+    groups, _ = piece_groups(shooters)
+    return [shooters[k] for k in np.argsort(groups > 0, kind="stable")]
+
+
 def shot_records(shooters: list[Shooter], slots: list[int]) -> np.ndarray:
-    """(MAX_SHOTS, 11, 4) float32 records of `shooters` (hemi-cube `slots`, -1: the bound map)."""
+    """(MAX_SHOTS * 11 + MAX_SHOTS * 4, 4) float32: the records of `shooters` (hemi-cube `slots`,
+    -1: the bound map), then the corners of their groups' whole polygons (`piece_groups`)."""
     records = np.zeros((MAX_SHOTS, SHOT_VEC4S, 4), dtype=np.float32)
+    corners = np.zeros((MAX_SHOTS, GROUP_VEC4S, 4), dtype=np.float32)
+    groups, wholes = piece_groups(shooters)
+    for g, whole in enumerate(wholes):
+        corners[g, :, :3] = whole
+        members = np.flatnonzero(groups == g + 1)
+        corners[g, :2, 3] = members[0], members[-1] + 1  # the group's shots: [first, end)
     for k, (shooter, slot) in enumerate(zip(shooters, slots)):
         x, y, pole = shooter.axes
         records[k, 0] = (*shooter.position, shooter.area)
         records[k, 1] = (*x, shooter.kind)
         records[k, 2] = (*y, shooter.patch)
-        records[k, 3] = (*pole, 0.0)
+        records[k, 3] = (*pole, groups[k])
         records[k, 4:8, :3] = shooter.polygon
         records[k, 8, :3] = shooter.radiosity
         records[k, 9] = (*shooter.light_direction, shooter.spot_cos_half)
         records[k, 10] = (shooter.spot_smooth, slot, shooter.ortho_extent, float(shooter.cluster))
-    return records
+    return np.concatenate([records.reshape(-1, 4), corners.reshape(-1, 4)])
 
 
 def patch_planes(patches: Patches, cluster_of: np.ndarray | None = None) -> bytes:
@@ -90,8 +124,9 @@ class ShotVisibility:
                 self.capacity = min(self.capacity, self.atlas.slots)
         else:
             self.capacity = 1
-        self.block = res.buffer(reserve=MAX_SHOTS * SHOT_VEC4S * 16)
+        self.block = res.buffer(reserve=MAX_SHOTS * (SHOT_VEC4S + GROUP_VEC4S) * 16)
         self.maps_rendered = 0
+        self.batch_kinds, self.batch_single_kinds, self.batch_lookup = 15, 15, 3  # set by prepare
 
     @property
     def map(self) -> VisibilityMap:
@@ -106,10 +141,13 @@ class ShotVisibility:
         return shooter.kind in (DIRECTIONAL, SKY)
 
     def batches(self, shooters: list[Shooter]) -> list[list[Shooter]]:
-        """Consecutive batches of at most `capacity`; a sun or the sky alone."""
+        """Consecutive batches of at most `capacity`; a sun or the sky alone; the pieces of one
+        polygon in one batch where they fit in one (`piece_groups`)."""
         batches, current = [], []
         for shooter in shooters:
-            if self.alone(shooter) or len(current) == self.capacity:
+            first_piece = shooter.whole is not None and not (current and current[-1].whole is shooter.whole)
+            breaks_group = first_piece and len(current) + shooter.pieces > self.capacity >= shooter.pieces
+            if self.alone(shooter) or len(current) == self.capacity or breaks_group:
                 if current:
                     batches.append(current)
                 current = []
@@ -124,8 +162,15 @@ class ShotVisibility:
         if len(shooters) > self.capacity and not (len(shooters) == 1):
             raise ValueError(f"a batch of {len(shooters)} shots exceeds {self.capacity}")
         slots = [-1] * len(shooters)
+        groups, wholes = piece_groups(shooters)
         uniforms = {"shot_count": len(shooters), "item_resolution": self.resolution,
-                    "hemicube_resolution": 1, "hemicube_tiles_per_row": 1}
+                    "hemicube_resolution": 1, "hemicube_tiles_per_row": 1,
+                    "single_count": int(np.argmax(groups > 0)) if len(wholes) else len(shooters),
+                    "group_count": len(wholes)}
+        # what the batch holds, for the passes' variants ("shot": SHOT_KINDS, VISIBILITY_LOOKUP)
+        self.batch_kinds = sum(1 << kind for kind in {shooter.kind for shooter in shooters})
+        self.batch_single_kinds = sum(1 << kind for kind in {s.kind for s, group in zip(shooters, groups) if group == 0})
+        self.batch_lookup = 2  # the map (also for the sky, which looks nothing up)
         if self.occlusion:
             if self.atlas is not None and not any(self.alone(s) for s in shooters):
                 slots = list(range(len(shooters)))
@@ -134,6 +179,7 @@ class ShotVisibility:
                 self.atlas.bind(texture_unit("HEMICUBES"))
                 uniforms.update(hemicube_resolution=self.atlas.resolution,
                                 hemicube_tiles_per_row=self.atlas.tiles_per_row)
+                self.batch_lookup = 1
                 self.maps_rendered += len(shooters)
             elif shooters[0].kind != SKY:
                 (shooter,) = shooters

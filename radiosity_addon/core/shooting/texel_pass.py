@@ -11,7 +11,7 @@ from ..gpu import Resources, storage
 from ..scene import Patches
 from .shooters import Shooter
 from .shooting_pass import dispatch, set_uniforms
-from .shots import ShotVisibility, patch_planes, shoot_in_batches
+from .shots import ShotVisibility, patch_planes, shoot_in_batches, singles_then_groups
 
 
 class TexelReceivers:
@@ -30,17 +30,21 @@ class TexelReceivers:
             "PATCH_PLANE": res.buffer(patch_planes(patches)),
         }
         self.visibility = visibility
-        self.program = res.gpu.compute("shoot_to_texels.comp", defines={
-            "KERNEL_EXACT": int(kernel == "exact"), "HIDE_BEHIND_OCCLUDERS": 1, **visibility.defines})
+        self.res = res
+        self.defines = {"KERNEL_EXACT": int(kernel == "exact"), "HIDE_BEHIND_OCCLUDERS": 1, **visibility.defines}
 
     def shoot(self, shooters: list[Shooter]) -> None:
-        """One batch (see `ShotVisibility.batches`)."""
-        uniforms = self.visibility.prepare(shooters)
-        set_uniforms(self.program, {"texel_count": self.count, **uniforms})
+        """One batch (see `ShotVisibility.batches`): the shots that are no piece of a group first,
+        as the shader reads them."""
+        uniforms = self.visibility.prepare(singles_then_groups(shooters))
+        program = self.res.gpu.compute("shoot_to_texels.comp", defines={
+            **self.defines, "SHOT_KINDS": self.visibility.batch_single_kinds,
+            "VISIBILITY_LOOKUP": self.visibility.batch_lookup})
+        set_uniforms(program, {"texel_count": self.count, **uniforms})
         for name, buffer in self.buffers.items():
             buffer.bind_to_storage_buffer(storage(name))
         self.ctx.memory_barrier()
-        dispatch(self.program, self.count)
+        dispatch(program, self.count)
         self.ctx.memory_barrier()
 
     def shoot_all(self, shooters: list[Shooter]) -> int:
