@@ -94,3 +94,44 @@ def test_hemicubes_see_an_emitter_four_millimetres_away_in_a_large_scene(gpu):
     # F from an inner point to the square 4 mm above it is 0.98 or more: B = 0.5 F
     assert solution.patch_radiosity[inner, 0].min() > 0.48
     assert solution.patch_radiosity[receiver, 0].max() <= 0.5 + 1e-3  # and never more than all of it
+
+
+def test_each_round_probes_only_the_patches_it_made_and_the_probe_is_the_ray_cast_light(gpu):
+    """Refinement's probe (the texel pass at element centres) against a ray-cast reference on the
+    box scene of test_texel_light, and after a split: the patches a round left alone are found
+    (corners, surface, side), and the light they carry over is what probing them again gives."""
+    from test_texel_light import box_faces, occluded_emitter_light
+
+    from radiosity_addon.core.refinement import probe_light, probe_shooters, unchanged_patches
+
+    low, high = np.array([0.8, 0.8, 0.0]), np.array([1.2, 1.2, 0.4])
+    emitter = [[0.75, 0.75, 1.5], [0.75, 1.25, 1.5], [1.25, 1.25, 1.5], [1.25, 0.75, 1.5]]
+    floor = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]
+    scene = scene_from_dict({"surfaces": [surface("floor", floor, 0.5, 0.0)]
+                             + [surface(f"box {k}", c, 0.5, 0.0, obj="box") for k, c in enumerate(box_faces(low, high))]
+                             + [surface("emitter", emitter, 0.0, 10.0)]})
+    effects, backs = effects_for(scene, True)
+    settings = SolveSettings(patch_size=0.5)
+    patches = subdivide(scene, None, 0.5, backs)
+    shooters = probe_shooters(scene, patches, effects)
+    light = probe_light(gpu, scene, patches, np.arange(len(patches)), shooters, settings, effects, 4)
+    floor_rows = np.flatnonzero(patches.surface == 0)
+    s = (np.arange(4) + 0.5) / 4
+    from radiosity_addon.core.scene.geometry import bilinear
+    points = bilinear(patches.corners[floor_rows], *np.meshgrid(s, s)).reshape(-1, 3)
+    exact = occluded_emitter_light(points, emitter, 10.0, low, high)
+    measured = light[floor_rows].reshape(-1, 3)[:, 0]
+    assert exact.max() > 0.2 and (exact == 0).sum() > 10
+    # exact but in the penumbra, where each of the emitter's 8 x 8 pieces is seen or not as a whole
+    assert np.abs(measured - exact).max() < 0.04 * exact.max()
+    assert np.sqrt(((measured - exact) ** 2).mean()) < 0.005 * exact.max()
+
+    split = np.zeros(len(patches), dtype=bool)
+    split[floor_rows[:3]] = True
+    after = split_patches(patches, split, backs)
+    of = unchanged_patches(patches, after)
+    assert (of < 0).sum() == 12 and len(after) == len(patches) + 9
+    kept = np.flatnonzero(of >= 0)
+    np.testing.assert_array_equal(after.corners[kept], patches.corners[of[kept]])
+    again = probe_light(gpu, scene, after, kept, probe_shooters(scene, after, effects), settings, effects, 4)
+    np.testing.assert_allclose(again, light[of[kept]], atol=1e-3 * exact.max())

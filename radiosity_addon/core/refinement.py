@@ -10,17 +10,20 @@ mean, so dim corners are not split for noise) is split — if another surface fa
 than its own size, where its light, sent as if uniform, lands wrong (a patch far from everything
 is a good enough shooter whatever its spread; the lightmaps recompute the direct light per
 texel). That is repeated `refinements` times, then the method solves once on the refined patches.
-The direct shots cost little next to the solve.
+The probe is the texel pass at the element centres (`shooting.light_at_points`), and after the
+first round only at the new children's: a patch a round left alone keeps its light, so a round
+costs its shots' visibility maps plus what it split, not the whole scene again.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .progressive import solve_progressive
 from .scene import Patches, split_patches
+from .scene.geometry import bilinear, tangent_frames
 from .scene.neighbours import near_pairs
-from .timing import StageTimer
+from .shooting import element_parameters, emitter_pieces, lamps_as_shooters, light_at_points
+from .shooting.sky import SKY_HEMICUBE_RESOLUTION, sky_fractions
 from .uvspace import patch_material_values
 
 REFINE_FLOOR = 0.05
@@ -149,22 +152,74 @@ def within_budget(patches: Patches, priority: np.ndarray, budget: int | None) ->
     return split
 
 
+def probe_shooters(scene, patches: Patches, effects) -> list:
+    """The direct light's shots the probe takes: lamps, the sun, and the emitters in about
+    PROBE_EMITTER_PIECES pieces."""
+    return lamps_as_shooters(scene) + emitter_pieces(scene, patches, effects.occlusion, PROBE_EMITTER_PIECES)
+
+
+def probe_light(gpu, scene, patches: Patches, rows: np.ndarray, shooters: list, settings, effects,
+                elements: int) -> np.ndarray:
+    """(len(rows), S, S, 3) direct light H at the S x S element centres of the patches `rows`:
+    `shooters` (`probe_shooters`) each with its own visibility, and the world colour times each
+    point's sky fraction."""
+    s, t = element_parameters(elements)
+    points = bilinear(patches.corners[rows], s, t).reshape(-1, 3)
+    owners = np.repeat(rows, elements * elements)
+    with gpu.resources() as res:
+        light = light_at_points(res, scene, patches, points, owners, shooters, settings.visibility,
+                                settings.visibility_res, effects.occlusion, capacity=settings.batch_shots)
+        if np.any(scene.world_color > 0) and len(points):
+            edges = (patches.corners[:, 1] - patches.corners[:, 0])[owners]
+            frames = tangent_frames(points, patches.normal[owners], edges)
+            fractions = sky_fractions(res, patches, frames, SKY_HEMICUBE_RESOLUTION, scene.diameter)
+            light = light + fractions[:, None] * scene.world_color
+    return light.reshape(len(rows), elements, elements, 3)
+
+
+def unchanged_patches(before: Patches, after: Patches) -> np.ndarray:
+    """(len(after),) the patch of `before` each patch of `after` is (same surface, side and
+    corners), -1 for the new ones (children of a split, backs made anew)."""
+    def keys(patches):
+        return np.concatenate([patches.corners.reshape(len(patches), -1), patches.surface[:, None],
+                               patches.is_back[:, None]], axis=1)
+
+    _, code = np.unique(np.concatenate([keys(before), keys(after)]), axis=0, return_inverse=True)
+    code = code.ravel()
+    of_code = np.full(code.max() + 1, -1, dtype=np.int64)
+    of_code[code[:len(before)]] = np.arange(len(before))
+    return of_code[code[len(before):]]
+
+
+def same_shots(a: list, b: list) -> bool:
+    return len(a) == len(b) and all(
+        np.array_equal(x.polygon, y.polygon) and np.array_equal(x.radiosity, y.radiosity) for x, y in zip(a, b))
+
+
 def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
            budget: int | None = None) -> tuple[Patches, list[int]]:
     """`patches` split where the direct light changes fast, and how many were split per round;
     never more than `budget` patches in all (the hemi-cube method's matrices must fit). The splits
     of the spread rule add at most `settings.refine_budget` times the patches there were (at least
     REFINE_MIN_PATCHES), largest first, so refinement grows linearly with the scene; the gap rule's
-    splits (at emitters) come first and are not counted."""
-    from dataclasses import replace
-
-    probe = replace(settings, elements=max(settings.elements, PROBE_ELEMENTS))
+    splits (at emitters) come first and are not counted. Each round probes only the patches the
+    last one made (`unchanged_patches`), unless the emitters' shots changed (a textured emitter
+    split)."""
+    elements = max(settings.elements, PROBE_ELEMENTS)
     spread_room = max(int(settings.refine_budget * len(patches)), REFINE_MIN_PATCHES)
     refined = []
+    light = shooters = None
     for level in range(settings.refinements):
         with timer.stage("refine"):
-            _, _, light, _, _ = solve_progressive(gpu, scene, patches, probe, effects, StageTimer(), direct_only=True,
-                                                  emitter_pieces_budget=PROBE_EMITTER_PIECES)
+            now_shooting = probe_shooters(scene, patches, effects)
+            if light is None or not same_shots(shooters, now_shooting):
+                light = probe_light(gpu, scene, patches, np.arange(len(patches)), now_shooting, settings, effects,
+                                    elements)
+            else:
+                fresh = np.flatnonzero(light_of < 0)
+                light = np.where((light_of >= 0)[:, None, None, None], light[np.maximum(light_of, 0)], 0.0)
+                light[fresh] = probe_light(gpu, scene, patches, fresh, now_shooting, settings, effects, elements)
+            shooters = now_shooting
             min_size = SMALLEST_PATCH * scene.diameter
             priority = patches_to_refine(patches, light, settings.refine_threshold, min_size, scene.corners,
                                          settings.emitter_gap_resolution)
@@ -175,7 +230,8 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
             if not split.any():
                 break
             refined.append(int(split.sum()))
-            patches = split_patches(patches, split, backs)
+            before, patches = patches, split_patches(patches, split, backs)
+            light_of = unchanged_patches(before, patches)
             if scene.material_maps:
                 patches.reflectance, patches.emission = patch_material_values(gpu, scene, patches)
     return patches, refined

@@ -15,7 +15,7 @@ from ..gpu import GPU
 from ..scene import Patches, Scene
 from ..scene.geometry import bilinear
 from ..settings import VISIBILITY_VARIANTS
-from ..shooting import ShotVisibility, TexelReceivers, direct_shooters
+from ..shooting import direct_shooters, light_at_points
 from ..uvspace import rasterize
 
 
@@ -36,11 +36,7 @@ def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, o
     """(N, 3) direct light H at `points` (N, 3) lying on the patches `owners` (N,), and the
     number of shots."""
     shooters = direct_shooters(scene, patches)
-    if not shooters or len(points) == 0:
-        return np.zeros((len(points), 3)), 0
     variant = visibility if visibility in VISIBILITY_VARIANTS else "hemicube"
     with gpu.resources() as res:
-        shots = ShotVisibility(res, patches, resolution, variant, scene.diameter, occlusion)
-        receivers = TexelReceivers(res, patches, points, patches.normal[owners], patches.plane[owners], "exact", shots)
-        receivers.shoot_all(shooters)
-        return receivers.read_light(), len(shooters)
+        light = light_at_points(res, scene, patches, points, owners, shooters, variant, resolution, occlusion)
+    return light, len(shooters)

@@ -3,7 +3,7 @@ a shot's light to them, and the same pass over lightmap texels for the direct li
 both methods and the lightmaps."""
 
 from .direct import (SOLVE_EMITTER_PIECES, DirectLightWork, direct_light_on_patches, direct_shooters, emitter_pieces,
-                     has_direct_light, shoot_lamps, shoot_sky)
+                     has_direct_light, lamps_as_shooters, light_at_points, shoot_lamps, shoot_sky)
 from .elements import ElementLayout, ElementTextures, element_areas, element_centers, element_parameters, patch_means
 from .lamps import lamp_shooters
 from .shooters import PatchShooters, Shooter
@@ -13,5 +13,5 @@ from .texel_pass import TexelReceivers
 
 __all__ = ["MAX_SHOTS", "SOLVE_EMITTER_PIECES", "ShotVisibility", "shot_records", "DirectLightWork", "ElementLayout", "ElementTextures", "PatchBuffers", "PatchShooters", "Shooter",
            "ShootingPass", "TexelReceivers", "direct_light_on_patches", "direct_shooters", "emitter_pieces", "element_areas",
-           "element_centers", "element_parameters", "has_direct_light", "lamp_shooters", "patch_means", "shoot_lamps",
+           "element_centers", "element_parameters", "has_direct_light", "lamp_shooters", "lamps_as_shooters", "light_at_points", "patch_means", "shoot_lamps",
            "shoot_sky"]
