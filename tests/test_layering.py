@@ -38,7 +38,7 @@ ALLOWED = {
     "progressive": BASE | {"gpu", "scene", "visibility", "shooting"},
     "report": BASE | {"scene", "hemicube", "progressive"},
     "solution": BASE | {"scene", "report"},
-    "refinement": BASE | {"gpu", "scene", "uvspace", "progressive"},
+    "refinement": BASE | {"gpu", "scene", "uvspace", "shooting"},
     "method_choice": BASE | {"scene", "shooting", "hemicube"},
     "solve": BASE | {"gpu", "scene", "shooting", "uvspace", "hemicube", "progressive", "report", "solution",
               "refinement", "method_choice"},
