@@ -9,6 +9,7 @@ from scenes import opposed_squares, surface
 from radiosity_addon.core import SolveSettings, scene_from_dict, solve, subdivide
 from radiosity_addon.core.refinement import GAP_RESOLUTION, facing_gaps, within_budget
 from radiosity_addon.core.scene import split_patches
+from radiosity_addon.core.scene.geometry import bilinear
 from radiosity_addon.core.scene.analysis import effects_for
 
 
@@ -116,8 +117,7 @@ def test_each_round_probes_only_the_patches_it_made_and_the_probe_is_the_ray_cas
     shooters = probe_shooters(scene, patches, effects)
     light = probe_light(gpu, scene, patches, np.arange(len(patches)), shooters, settings, effects, 4)
     floor_rows = np.flatnonzero(patches.surface == 0)
-    s = (np.arange(4) + 0.5) / 4
-    from radiosity_addon.core.scene.geometry import bilinear
+    s = (np.arange(4) + 0.5) / 4  # the element centres, row by row
     points = bilinear(patches.corners[floor_rows], *np.meshgrid(s, s)).reshape(-1, 3)
     exact = occluded_emitter_light(points, emitter, 10.0, low, high)
     measured = light[floor_rows].reshape(-1, 3)[:, 0]

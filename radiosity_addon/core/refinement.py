@@ -20,10 +20,9 @@ from __future__ import annotations
 import numpy as np
 
 from .scene import Patches, split_patches
-from .scene.geometry import bilinear, tangent_frames
 from .scene.neighbours import near_pairs
-from .shooting import element_parameters, emitter_pieces, lamps_as_shooters, light_at_points
-from .shooting.sky import SKY_HEMICUBE_RESOLUTION, sky_fractions
+from .shooting import emitter_pieces, lamps_as_shooters, light_at_points
+from .shooting.sky import SKY_HEMICUBE_RESOLUTION, element_frames, sky_fractions
 from .uvspace import patch_material_values
 
 REFINE_FLOOR = 0.05
@@ -163,15 +162,12 @@ def probe_light(gpu, scene, patches: Patches, rows: np.ndarray, shooters: list, 
     """(len(rows), S, S, 3) direct light H at the S x S element centres of the patches `rows`:
     `shooters` (`probe_shooters`) each with its own visibility, and the world colour times each
     point's sky fraction."""
-    s, t = element_parameters(elements)
-    points = bilinear(patches.corners[rows], s, t).reshape(-1, 3)
-    owners = np.repeat(rows, elements * elements)
+    frames = element_frames(patches, elements, rows)
+    points, owners = frames[0], np.repeat(rows, elements * elements)
     with gpu.resources() as res:
         light = light_at_points(res, scene, patches, points, owners, shooters, settings.visibility,
                                 settings.visibility_res, effects.occlusion, capacity=settings.batch_shots)
         if np.any(scene.world_color > 0) and len(points):
-            edges = (patches.corners[:, 1] - patches.corners[:, 0])[owners]
-            frames = tangent_frames(points, patches.normal[owners], edges)
             fractions = sky_fractions(res, patches, frames, SKY_HEMICUBE_RESOLUTION, scene.diameter)
             light = light + fractions[:, None] * scene.world_color
     return light.reshape(len(rows), elements, elements, 3)

@@ -23,7 +23,7 @@ from ..errors import SolveCancelled
 from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
-from ..shooting import (SOLVE_EMITTER_PIECES, DirectLightWork, ElementTextures, PatchBuffers, PatchShooters, ShootingPass, ShotVisibility,
+from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchShooters, ShootingPass, ShotVisibility,
                         emitter_pieces, patch_means, shoot_lamps, shoot_sky)
 from ..timing import StageTimer
 from ..visibility import VARIANTS
@@ -78,17 +78,14 @@ class ProgressiveDetails:
 
 
 def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
-                      timer: StageTimer, progress=None, should_cancel=None, preview=None, preview_interval=2.0,
-                      direct_only: bool = False, emitter_pieces_budget: int = SOLVE_EMITTER_PIECES):
+                      timer: StageTimer, progress=None, should_cancel=None, preview=None, preview_interval=2.0):
     """(patch radiosity (P, 3), element radiosity (P, S, S, 3), element light H (P, S, S, 3), its
     direct part (lamps and emitters, not the sky), ProgressiveDetails), with B = E + ρH.
     `effects` (the scene analysis) may switch off visibility maps (nothing occludes) and
     residual updates (no interreflection: only emitters and lamps ever shoot).
     `preview(element radiosity, element light)` is called every `preview_interval` seconds with
     the radiosity so far plus the ambient term ρ · Ambient, and the light so far plus Ambient
-    (for display only). With `direct_only`
-    it stops once the lamps and emitters have shot (what the refinement estimates from);
-    `emitter_pieces_budget`: about how many pieces the emitters shoot in (`emitter_pieces`)."""
+    (for display only)."""
     started = time.perf_counter()
     variant = VARIANTS[settings.visibility]
     tolerance = settings.effective_tolerance
@@ -99,7 +96,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
     ambient = ambient_term(patches)
     shooters = PatchShooters(patches)
     clusters = None
-    if 0 < settings.shooter_clusters < len(patches) and effects.interreflection and not direct_only:
+    if 0 < settings.shooter_clusters < len(patches) and effects.interreflection:
         with timer.stage("clusters"):
             objects = np.unique([surface.object_name for surface in scene.surfaces], return_inverse=True)[1]
             clusters = build_clusters(patches, settings.shooter_clusters, owner=objects.ravel()[patches.surface])
@@ -142,10 +139,10 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         stop_reason = "tolerance"
         # every emitter shoots its own emission first, in pieces (and keeps what it received): the
         # light after those shots, less the sky's, is the direct light the lightmaps recompute per texel
-        forced = emitter_pieces(scene, patches, effects.occlusion, emitter_pieces_budget)
+        forced = emitter_pieces(scene, patches, effects.occlusion)
         forced_power = sum((piece.power for piece in forced), np.zeros(3))  # emission not yet shot
         direct_light = recent_from = None
-        completing = settings.complete_remainder and effects.interreflection and not direct_only and emitted_total > 0
+        completing = settings.complete_remainder and effects.interreflection and emitted_total > 0
         while True:
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
@@ -184,9 +181,8 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                 chosen, grouped = selection.choose(residuals, room)
             else:
                 chosen = residuals.strongest(room)
-            done = direct_only or fraction_left <= tolerance or emitted_total <= 0 or not residuals.power.max() > 0
+            done = fraction_left <= tolerance or emitted_total <= 0 or not residuals.power.max() > 0
             if not forced and done:
-                stop_reason = "direct light" if direct_only else stop_reason
                 break
             if room <= 0:
                 stop_reason = "max_shots"

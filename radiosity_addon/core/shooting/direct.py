@@ -22,7 +22,7 @@ from .elements import ElementTextures
 from .lamps import AREA_LAMP_MAX_SPLIT, lamp_shooters, polygon_shooters
 from .shooters import Shooter
 from .shooting_pass import PatchBuffers, ShootingPass
-from .shots import ShotVisibility
+from .shots import MAX_SHOTS, ShotVisibility
 from .sky import SKY_HEMICUBE_RESOLUTION, element_frames, sky_fractions
 from .texel_pass import TexelReceivers
 
@@ -129,7 +129,7 @@ def direct_light_on_patches(res: Resources, scene: Scene, patches: Patches, visi
 
 def light_at_points(res: Resources, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray,
                     shooters: list[Shooter], visibility: str, resolution: int, occlusion: bool,
-                    capacity: int | None = None) -> np.ndarray:
+                    capacity: int = MAX_SHOTS) -> np.ndarray:
     """(N, 3) light H that `points` (N, 3) lying on the patches `owners` (N,) gather from
     `shooters` (lamps, the sun, emitters' pieces), each shot with its own visibility map of
     `resolution` (the `visibility` variant): the texel pass, for lightmap texels and for
@@ -137,8 +137,7 @@ def light_at_points(res: Resources, scene: Scene, patches: Patches, points: np.n
     if not shooters or len(points) == 0:
         return np.zeros((len(points), 3))
     with res.gpu.resources() as scoped:
-        shots = ShotVisibility(scoped, patches, resolution, visibility, scene.diameter, occlusion,
-                               **({} if capacity is None else {"capacity": capacity}))
+        shots = ShotVisibility(scoped, patches, resolution, visibility, scene.diameter, occlusion, capacity)
         receivers = TexelReceivers(scoped, patches, points, patches.normal[owners], patches.plane[owners], "exact",
                                    shots)
         receivers.shoot_all(shooters)

@@ -7,19 +7,21 @@ import numpy as np
 
 from ..gpu import Resources
 from ..scene import Patches
-from ..scene.geometry import tangent_frames
+from ..scene.geometry import bilinear, tangent_frames
 from ..visibility import HemicubeRenderer
-from .elements import element_centers
+from .elements import element_parameters
 
 SKY_HEMICUBE_RESOLUTION = 64
 
 
-def element_frames(patches: Patches, elements: int):
-    """Hemi-cube frames at every element centre, flattened in element order [p, j, i]."""
+def element_frames(patches: Patches, elements: int, rows: np.ndarray | None = None):
+    """Hemi-cube frames at every element centre of the patches `rows` (None: all), flattened in
+    element order [p, j, i]."""
+    rows = np.arange(len(patches)) if rows is None else rows
     per_patch = elements * elements
-    centres = element_centers(patches, elements).reshape(-1, 3)
-    normals = np.repeat(patches.normal, per_patch, axis=0)
-    edges = np.repeat(patches.corners[:, 1] - patches.corners[:, 0], per_patch, axis=0)
+    centres = bilinear(patches.corners[rows], *element_parameters(elements)).reshape(-1, 3)
+    normals = np.repeat(patches.normal[rows], per_patch, axis=0)
+    edges = np.repeat(patches.corners[rows, 1] - patches.corners[rows, 0], per_patch, axis=0)
     return tangent_frames(centres, normals, edges)
 
 
