@@ -69,7 +69,8 @@ void main() {
 #endif
         for (int k = 0; k < shot_count; ++k) {
             int level = int(shots[k].extra.w + 0.5);
-            int shooter = level > 0 ? plane_of[p].id[level] : p;  // a cluster shoots all its members
+            // a cluster shoots all its members
+            int shooter = level == 0 ? p : level < 4 ? plane_of[p].id[level] : plane_of[p].coarser_id[level - 4];
             if (int(shots[k].axis_y_patch.w) == shooter) {
                 unshot = vec4(0.0);  // the shot leaves the shooter's residual
                 continue;

@@ -1,8 +1,9 @@
 """Every stage of a bake grows about linearly with the scene: the benchmark's furnished room at
 ~1.2k and ~3.9k triangles (3.2 x), baked stage by stage as the add-on bakes it
 (radiosity_addon/bench/scaling.py), each stage's time compared as a ratio. The progressive solve
-runs a fixed number of shots, so its per-shot cost is what is compared; how many shots a scene
-needs is the bench's (tools/measure_scaling.py). The hemi-cube method's form factors are O(P^2)
+runs a fixed number of shots, so its per-shot cost is what is compared; that a denser scene needs
+no more shots is test_clusters.py's (the Cornell box at 4 x the patches), the rooms' counts the
+bench's (tools/measure_scaling.py). The hemi-cube method's form factors are O(P^2)
 by nature (its memory guard refuses large scenes before any work: test_hemicube.py)."""
 
 from __future__ import annotations

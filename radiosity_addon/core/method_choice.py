@@ -4,8 +4,10 @@ llvmpipe; a faster GPU scales both methods' costs alike to first order, so the c
 
 Progressive refinement: shots ~ SHOTS_PER_PATCH(tolerance) x shooters, each drawing a hemi-cube
 (pixels, and every triangle on each of 5 faces) and gathered by every element. The shooters are
-the patches, or at most `shooter_clusters` when the patches are more (clusters shoot as one; on
-the 16k-triangle room, 23 424 patches in 1 990 clusters took 3 744 shots, the model says 3 625).
+the patches, or at most `shooter_clusters` when the patches are more (clusters shoot as one, and
+as the unshot light weakens whole coarse clusters shoot: CLUSTERED_SHOTS of the shots per patch
+each; draft on the 3.9k- and 15.8k-triangle rooms, 7 007 and 23 424 patches, took 1 888 and
+1 792 shots, the model says 1 813 for both).
 Hemi-cube method: a hemi-cube per receiving element (S_h^2 per patch), then Jacobi sweeps over
 the P x P matrix (~log(tolerance) / log(mean reflectance) sweeps); its matrices must fit the
 memory limit, else it is not a choice at all.
@@ -29,6 +31,9 @@ HEMICUBE_SECONDS = {"pixel": 4.92e-08, "triangle": 6.43e-08}  # a hemi-cube draw
 SHOT_SECONDS = {"pixel": 5.18e-09, "triangle": 1.21e-07, "element": 3.4e-07}  # a progressive shot
 SECONDS_PER_MATRIX_ENTRY_SWEEP = 3.93e-09
 SHOTS_PER_PATCH = {0.01: 2.62, 0.003: 3.56, 0.001: 4.40}  # progressive, Cornell box, by tolerance
+# clustered shots per shots_per_patch x shooter_clusters, measured on the bench's rooms (draft:
+# 0.52 at 3.9k triangles, 0.49 at 15.8k; progressive/clusters.py)
+CLUSTERED_SHOTS = 0.5
 ELEMENT_BYTES = 2 * 16 + 8  # light and residual texels (RGBA32F) and their share of the patch buffers
 
 
@@ -74,7 +79,8 @@ def predict_progressive(patches: Patches, settings: SolveSettings, shooters: int
     shots = shots_per_patch(settings.effective_tolerance if settings.method != "auto"
                             else replace(settings, method="progressive").effective_tolerance)
     if shooters is None:
-        shooters = min(count, settings.shooter_clusters) if settings.shooter_clusters > 0 else count
+        clustered = 0 < settings.shooter_clusters < count
+        shooters = settings.shooter_clusters * CLUSTERED_SHOTS if clustered else count
     shots *= shooters
     seconds = shots * (hemicube_seconds(SHOT_SECONDS, hemicube_resolution(settings.visibility_res), triangles)
                        + SHOT_SECONDS["element"] * elements)

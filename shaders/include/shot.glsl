@@ -44,13 +44,14 @@ struct Shot {
     vec4 radiosity;       // what it shoots
     vec4 spot;            // the lamp's axis or the sun's travel direction, cos of half the cone (-2: none)
     vec4 extra;           // the cone's soft width, the hemi-cube slot (-1: the map), the sun map's half-width,
-                          // the level (1-3) of the cluster of patches shot (all its members), 0: none
+                          // the level (1-7) of the cluster of patches shot (all its members), 0: none
 };
 
 // after the records, the corners of each group's whole polygon (shots.piece_groups)
 layout(std140, binding = UNIFORM_SHOTS) uniform Shots { Shot shots[MAX_SHOTS]; vec4 group_corner[4 * MAX_SHOTS]; };
 // per patch: its plane's equation (n, n . x), the id of that plane (a surface side), its corners
-struct PatchPlane { vec4 equation; ivec4 id; vec4 corner[4]; };  // id: plane, shooter clusters at levels 1-3
+// id: plane, shooter clusters at levels 1-3; coarser_id: at levels 4-7 (-1: none)
+struct PatchPlane { vec4 equation; ivec4 id; ivec4 coarser_id; vec4 corner[4]; };
 layout(std430, binding = STORAGE_PATCH_PLANE) readonly buffer Plane { PatchPlane plane_of[]; };
 layout(binding = TEXTURE_HEMICUBES) uniform usampler2D hemicubes;
 layout(binding = TEXTURE_ITEM_BUFFER) uniform usampler2D item_buffer;

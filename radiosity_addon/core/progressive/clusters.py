@@ -3,12 +3,14 @@ shots stops growing with the number of patches.
 
 Progressive refinement's cost is shots × receiving elements. Without clusters every patch that
 holds a share of the light shoots, so shots grow with the patches and the solve with their square.
-Here the patches are grouped once per solve into CLUSTER_LEVELS nested levels of clusters:
-patches of one object whose centres share a cell of a uniform grid, whose normals share a bin (an
-octahedral grid of NORMAL_BINS × NORMAL_BINS over directions, about 20° wide) and whose planes lie
-within a slab of PLANE_SLAB cells. The coarsest cell is the smallest of a geometric series that
-gives at most `target` clusters (so their count depends on the scene's extent, not on its
-tessellation); each finer level halves it.
+Here the patches are grouped once per solve into nested levels of clusters: patches of one object
+whose centres share a cell of a uniform grid, whose normals share a bin (an octahedral grid of
+NORMAL_BINS × NORMAL_BINS over directions, about 20° wide) and whose planes lie within a slab of
+PLANE_SLAB cells. The coarsest cell is the smallest of a geometric series that gives at most
+`target` clusters, found by bisection (so their count depends on the scene's extent, not on its
+tessellation); each finer level halves it, down to the level whose clusters hold FINEST_MEMBERS
+patches or fewer on average (at most MAX_CLUSTER_LEVELS levels): a denser scene gets more levels,
+not more patches shooting alone.
 
 A cluster shoots the sum of its members' unshot power as one polygon: a rectangle in the plane of
 its eye patch (the member nearest the centroid of the members' unshot power), along that patch's
@@ -17,8 +19,9 @@ and a half-lit cluster from its lit half), seen from the eye patch's visibility 
 member's residual is cleared by the shot and no member receives from it. That is exact for far
 receivers and approximate within about a cell, so only weak clusters shoot as one
 (`ClusteredSelection`): a patch shoots with the coarsest of its clusters whose power is under
-CLUSTER_POWER × the emitted light / that level's cluster count, or alone (the sun's patch on the
-floor, a wall beside a lamp).
+CLUSTER_POWER × the emitted light / the coarsest level's cluster count, or alone (the sun's patch
+on the floor, a wall beside a lamp). One bound for every level: a finer cluster is smaller, so
+at the same power it errs less than a coarser one that already shoots as one.
 """
 
 from __future__ import annotations
@@ -35,7 +38,8 @@ from .selection import strongest
 NORMAL_BINS = 8  # per side of the octahedral grid of normal directions
 CELL_GROWTH = 1.25  # ratio between the cell sizes tried
 CLUSTER_POWER = 1.0  # a cluster shoots as one below this many mean cluster powers of the emitted light
-CLUSTER_LEVELS = 3  # nested levels of clusters, each cell twice the next finer one's
+MAX_CLUSTER_LEVELS = 7  # nested levels of clusters at most, each cell twice the next finer one's (shot.glsl's PatchPlane holds 7)
+FINEST_MEMBERS = 2.0  # levels are added until a cluster of the finest holds this many patches on average
 PLANE_SLAB = 0.125  # members lie within this many cells of one plane (a painting and the wall behind it part)
 
 
@@ -58,8 +62,23 @@ def cluster_keys(centers: np.ndarray, normals: np.ndarray, normal_bin: np.ndarra
     face and the wall behind it do not cluster)."""
     cells = np.floor((centers - centers.min(axis=0)) / cell).astype(np.int64)
     offset = np.floor((normals * centers).sum(axis=1) / (PLANE_SLAB * cell)).astype(np.int64)
-    keys = np.concatenate([cells, normal_bin[:, None], offset[:, None], owner[:, None]], axis=1)
-    return np.unique(keys, axis=0, return_inverse=True)[1].ravel()
+    return group_rows([cells[:, 0], cells[:, 1], cells[:, 2], normal_bin, offset, owner])
+
+
+def group_rows(columns: list) -> np.ndarray:
+    """(P,) index 0 .. G-1 of each row's distinct tuple of integer `columns` (P,) each, in the
+    tuples' lexicographic order: np.unique(axis=0)'s inverse, with the columns packed into one
+    int64 key (mixed radix) and a 1-D sort, renumbered first whenever the key would overflow."""
+    key, bound = np.zeros(len(columns[0]), dtype=np.int64), 1
+    for column in columns:
+        column = np.asarray(column, dtype=np.int64)
+        low = int(column.min(initial=0))
+        span = int(column.max(initial=0)) - low + 1
+        if bound * span >= 2 ** 62:
+            key = np.unique(key, return_inverse=True)[1].ravel()
+            bound = int(key.max(initial=0)) + 1
+        key, bound = key * span + (column - low), bound * span
+    return np.unique(key, return_inverse=True)[1].ravel()
 
 
 @dataclass
@@ -82,27 +101,34 @@ class PatchClusters:
 
 
 def build_clusters(patches: Patches, target: int, owner: np.ndarray | None = None,
-                   levels: int = CLUSTER_LEVELS) -> list[PatchClusters]:
-    """`levels` nested levels of clusters, finest first; the coarsest has about `target` clusters
-    at most (fewer when the patches are fewer), each finer one cells half as wide. O(P log P).
+                   max_levels: int = MAX_CLUSTER_LEVELS) -> list[PatchClusters]:
+    """Nested levels of clusters, finest first; the coarsest has about `target` clusters at most
+    (fewer when the patches are fewer), each finer one cells half as wide, the finest the first
+    whose clusters hold FINEST_MEMBERS patches or fewer on average (or the `max_levels`th).
+    O(P log P) per level.
     Patches of different `owner`s (P,) (their objects: a book and the shelf it stands in) never
     cluster."""
     centers = patches.center
     normal_bin = octahedral_bins(patches.normal)
     owner = np.zeros(len(patches), dtype=np.int64) if owner is None else np.asarray(owner, dtype=np.int64)
     extent = float(np.max(centers.max(axis=0) - centers.min(axis=0))) if len(patches) else 0.0
-    cell = max(extent, 1e-6) / 64
-    of_patch = cluster_keys(centers, patches.normal, normal_bin, owner, cell)
-    while of_patch.max(initial=-1) + 1 > target and cell < 4 * extent:
-        cell *= CELL_GROWTH
-        of_patch = cluster_keys(centers, patches.normal, normal_bin, owner, cell)
+    smallest = max(extent, 1e-6) / 64
+    last = int(np.ceil(np.log(256) / np.log(CELL_GROWTH)))  # smallest × CELL_GROWTH^last ≥ 4 × extent
+    count = lambda k: int(cluster_keys(centers, patches.normal, normal_bin, owner,  # noqa: E731
+                                       smallest * CELL_GROWTH ** k).max(initial=-1)) + 1
+    low, high = 0, last  # bisection: the counts fall as the cells grow (a few sorts, not one per size)
+    while low < high:
+        middle = (low + high) // 2
+        low, high = (low, middle) if count(middle) <= target else (middle + 1, high)
+    cell = smallest * CELL_GROWTH ** low
     result = []
-    for k in reversed(range(levels)):
-        size = cell / 2 ** k  # the same origin: a cell's halves nest in it, as do the slabs
+    while len(result) < max_levels and (not result or result[0].members.mean() > FINEST_MEMBERS):
+        size = cell / 2 ** len(result)  # the same origin: a cell's halves nest in it, as do the slabs
         of_patch = cluster_keys(centers, patches.normal, normal_bin, owner, size)
         members = np.bincount(of_patch)
-        result.append(PatchClusters(of_patch=of_patch, members=members, by_cluster=np.argsort(of_patch, kind="stable"),
-                                    starts=np.concatenate([[0], np.cumsum(members)]), cell=size))
+        result.insert(0, PatchClusters(of_patch=of_patch, members=members,
+                                       by_cluster=np.argsort(of_patch, kind="stable"),
+                                       starts=np.concatenate([[0], np.cumsum(members)]), cell=size))
     return result
 
 
@@ -156,13 +182,14 @@ class ClusterShooters:
 class ClusteredSelection:
     """The next shooters when patches cluster, in `levels` (finest first, each nested in the next):
     each patch shoots with the coarsest of its clusters that is weak — two members or more, power
-    under CLUSTER_POWER × the emitted light / that level's cluster count — or alone when none is;
+    under CLUSTER_POWER × the emitted light / the coarsest level's cluster count — or alone when
+    none is;
     the strongest of these candidates shoot. A strong coarse cluster thus splits into finer ones
     before it splits into patches."""
 
     def __init__(self, patches: Patches, levels: list[PatchClusters], emitted: float):
         self.levels = levels
-        self.thresholds = [CLUSTER_POWER * emitted / len(level) for level in levels]
+        self.threshold = CLUSTER_POWER * emitted / len(levels[-1])
         self.area = patches.area
         self.shooters = [ClusterShooters(patches, level, k) for k, level in enumerate(levels, start=1)]
 
@@ -170,9 +197,9 @@ class ClusteredSelection:
         """(patches that shoot alone, strongest first; the clusters' shooters)."""
         unit_level = np.zeros(len(self.area), dtype=np.int64)
         powers = []
-        for k, (level, threshold) in enumerate(zip(self.levels, self.thresholds), start=1):
+        for k, level in enumerate(self.levels, start=1):
             power = level.power(residuals.power)
-            weak = (power < threshold) & (level.members >= 2)
+            weak = (power < self.threshold) & (level.members >= 2)
             unit_level = np.where(weak[level.of_patch], k, unit_level)  # coarser levels override
             powers.append(power)
         candidates = [np.where(unit_level == 0, residuals.power, 0.0)]

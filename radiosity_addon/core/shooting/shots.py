@@ -75,15 +75,16 @@ def shot_records(shooters: list[Shooter], slots: list[int]) -> np.ndarray:
 def patch_planes(patches: Patches, cluster_of: np.ndarray | None = None) -> bytes:
     """shot.glsl's PatchPlane per patch: its plane's equation (n, n . x) as float32, its plane id
     (patches of one side of a surface are coplanar: a visibility lookup accepts any of them) and
-    its shooter clusters (`cluster_of` (P, levels ≤ 3), -1 without), its four corners (a triangle
-    repeats its last)."""
+    its shooter clusters (`cluster_of` (P, levels ≤ 7), finest first, -1 without), its four corners
+    (a triangle repeats its last)."""
     equation = np.concatenate([patches.normal, np.einsum("pd,pd->p", patches.normal, patches.center)[:, None]],
                               axis=1).astype(np.float32)
-    ids = np.zeros((len(patches), 4), dtype=np.int32)
+    ids = np.full((len(patches), 8), -1, dtype=np.int32)  # id, coarser_id
     ids[:, 0] = patches.plane
-    ids[:, 1:] = -1
     if cluster_of is not None:
         cluster_of = np.asarray(cluster_of).reshape(len(patches), -1)
+        if cluster_of.shape[1] > 7:
+            raise ValueError(f"{cluster_of.shape[1]} levels of shooter clusters: PatchPlane holds 7")
         ids[:, 1:1 + cluster_of.shape[1]] = cluster_of
     corners = np.concatenate([patches.corners, np.zeros((len(patches), 4, 1))], axis=2).astype(np.float32)
     return np.concatenate([equation.view(np.int32), ids, corners.reshape(len(patches), 16).view(np.int32)],
