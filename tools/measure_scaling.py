@@ -2,13 +2,16 @@
 benchmark's furnished rooms (radiosity_addon/bench/rooms.py) from ~1k to ~100k triangles.
 
     .venv/bin/python tools/measure_scaling.py --output-dir out/scaling \\
-        [--triangles 1000 4000 16000 64000 100000] [--methods auto] [--quality draft] [--timeout 1800]
+        [--triangles 1000 4000 16000 64000 100000] [--methods auto] [--quality draft] [--timeout 1800] \\
+        [--cycles 64]
 
 Every (room, method) runs in a process of its own, which builds the room and bakes it stage by
 stage as the add-on does (radiosity_addon/bench/scaling.py: export, material maps, the core
 solve's stages, lightmaps, write-back), each stage's seconds and peak resident memory recorded.
+After each room's first bake, Cycles bakes the same room (built again, saved in DIR) into
+lightmaps of the same sizes at `--cycles` samples per texel, in a process of its own (0: not).
 Writes DIR/scaling.json, and DIR/scaling.png (seconds and peak memory per stage against
-triangles, log-log).
+triangles, log-log, with Cycles' whole bake).
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ def plot(path: Path, runs: list[dict]) -> None:
     import matplotlib.pyplot as plt
 
     figure, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8))
-    for method in dict.fromkeys(run["method_asked"] for run in runs):
+    for method in dict.fromkeys(run["method_asked"] for run in runs if not run["method_asked"].startswith("cycles")):
         done = sorted((run for run in runs if run["method_asked"] == method and "stage_seconds" in run),
                       key=lambda run: run["triangles"])
         names = list(dict.fromkeys(name for run in done for name in run["stage_seconds"]))
@@ -45,6 +48,13 @@ def plot(path: Path, runs: list[dict]) -> None:
             right.plot(x, [p[2] for p in points], label=f"{name}", **style)
         left.plot([run["triangles"] for run in done], [run["seconds"] for run in done], "k--", marker="s",
                   label=f"whole bake ({method})")
+    for method in dict.fromkeys(run["method_asked"] for run in runs if run["method_asked"].startswith("cycles")):
+        done = sorted((run for run in runs if run["method_asked"] == method and "seconds" in run),
+                      key=lambda run: run["triangles"])
+        x = [run["triangles"] for run in done]
+        style = {"color": "grey", "linestyle": "-.", "marker": "D", "linewidth": 2}
+        left.plot(x, [run["seconds"] for run in done], label=f"whole bake ({method})", **style)
+        right.plot(x, [run["peak_mb"] for run in done], label=f"whole bake ({method})", **style)
     for axis, label in ((left, "seconds"), (right, "peak resident memory, MiB")):
         axis.set_xscale("log")
         axis.set_yscale("log")
@@ -65,7 +75,10 @@ def main() -> int:
     parser.add_argument("--methods", nargs="+", default=["auto"])
     parser.add_argument("--quality", default="draft")
     parser.add_argument("--timeout", type=float, default=1800.0, help="seconds per bake before it is stopped")
+    parser.add_argument("--cycles", type=int, default=64, metavar="SAMPLES",
+                        help="Cycles' samples per texel on the same rooms (0: no Cycles bakes)")
     parser.add_argument("--one", nargs=2, metavar=("TRIANGLES", "METHOD"), help=argparse.SUPPRESS)
+    parser.add_argument("--one-cycles", nargs=2, metavar=("TRIANGLES", "SIZES"), help=argparse.SUPPRESS)
     parser.add_argument("--replot", action="store_true", help="only redraw DIR/scaling.png from DIR/scaling.json")
     args = parser.parse_args()
     if args.replot:
@@ -76,25 +89,39 @@ def main() -> int:
         print(json.dumps(bake_room_in_stages(int(args.one[0]), {"quality": args.quality, "method": args.one[1]}),
                          default=float))
         return 0
+    if args.one_cycles:
+        from radiosity_addon.bench.scaling import bake_room_with_cycles
+        sizes = json.loads(Path(args.one_cycles[1]).read_text())
+        print(json.dumps(bake_room_with_cycles(int(args.one_cycles[0]), sizes, args.cycles, args.output_dir),
+                         default=float))
+        return 0
     out = args.output_dir
     out.mkdir(parents=True, exist_ok=True)
     runs = []
-    for method in args.methods:
+
+    def run_one(triangles: int, method_asked: str, command: list) -> dict:
+        started = time.perf_counter()
+        try:
+            done = subprocess.run(command, capture_output=True, text=True, timeout=args.timeout)
+            lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
+            run = json.loads(lines[-1]) if done.returncode == 0 and lines else \
+                {"triangles_target": triangles, "failed": done.stderr.strip().splitlines()[-3:]}
+        except subprocess.TimeoutExpired:
+            run = {"triangles_target": triangles, "failed": f"stopped after {args.timeout:.0f} s"}
+        run.update(method_asked=method_asked, wall_seconds=time.perf_counter() - started, load_average=os.getloadavg())
+        runs.append(run)
+        print(json.dumps({k: v for k, v in run.items() if k != "sizes"}, default=float), flush=True)
+        (out / "scaling.json").write_text(json.dumps(runs, indent=1, default=float))
+        return run
+
+    base = [sys.executable, __file__, "--output-dir", str(out), "--quality", args.quality, "--cycles", str(args.cycles)]
+    for k, method in enumerate(args.methods):
         for triangles in args.triangles:
-            command = [sys.executable, __file__, "--output-dir", str(out), "--quality", args.quality,
-                       "--one", str(triangles), method]
-            started = time.perf_counter()
-            try:
-                done = subprocess.run(command, capture_output=True, text=True, timeout=args.timeout)
-                lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
-                run = json.loads(lines[-1]) if done.returncode == 0 and lines else \
-                    {"triangles_target": triangles, "failed": done.stderr.strip().splitlines()[-3:]}
-            except subprocess.TimeoutExpired:
-                run = {"triangles_target": triangles, "failed": f"stopped after {args.timeout:.0f} s"}
-            run.update(method_asked=method, wall_seconds=time.perf_counter() - started, load_average=os.getloadavg())
-            runs.append(run)
-            print(json.dumps(run, default=float), flush=True)
-            (out / "scaling.json").write_text(json.dumps(runs, indent=1, default=float))
+            run = run_one(triangles, method, base + ["--one", str(triangles), method])
+            if k == 0 and args.cycles > 0 and "sizes" in run:  # Cycles into the first method's lightmap sizes
+                sizes = out / f"sizes_{triangles}.json"
+                sizes.write_text(json.dumps(run["sizes"]))
+                run_one(triangles, f"cycles {args.cycles} spp", base + ["--one-cycles", str(triangles), str(sizes)])
     plot(out / "scaling.png", runs)
     return 0
 

@@ -7,7 +7,8 @@ emission bakes), the core solve's own stages (analyse, subdivide, refine, direct
 form factors and the linear solve, ...), lightmaps, and the write-back into the file. All run in
 this process (no solver child), so its memory is the solve's. A stage's peak memory is the
 resident set's high-water mark while it ran (Linux: /proc/self/clear_refs resets it when a stage
-starts; elsewhere the peak so far).
+starts; elsewhere the peak so far). `bake_room_with_cycles` times Cycles on the same room, into
+lightmaps of the same sizes (the peer of issue 13's scaling curve).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import re
 import time
+from pathlib import Path
 
 import bpy
 
@@ -113,4 +115,19 @@ def bake_room_in_stages(triangles: int, solve: dict, lightmaps: dict | None = No
             "patches": report["counts"]["patches"], "elements": report["counts"].get("elements"),
             "shots": report.get("shots"), "why": (report.get("method_choice") or {}).get("reason"),
             "seconds": time.perf_counter() - started, "stage_seconds": stages.seconds,
-            "stage_peak_mb": stages.peak_mb, "texels": int(sum(i.shape[0] * i.shape[1] for i in images.values()))}
+            "stage_peak_mb": stages.peak_mb, "texels": int(sum(i.shape[0] * i.shape[1] for i in images.values())),
+            "sizes": {name: [int(image.shape[1]), int(image.shape[0])] for name, image in images.items()}}
+
+
+def bake_room_with_cycles(triangles: int, sizes: dict, samples: int, directory) -> dict:
+    """The same room (built again: it is deterministic) saved in `directory` and baked by Cycles
+    into lightmaps of `sizes` ({object: [width, height]}: ours) at `samples` per texel, all objects
+    in one bake call (blend_reference.bake_lightmaps): its seconds and this process's peak memory."""
+    from . import blend_reference
+    path = Path(directory) / f"room_{triangles}.blend"
+    built = rooms.save_room(path, triangles)
+    reset_high_water()
+    bake = blend_reference.bake_lightmaps(path, sizes, "combined", samples, seed=1)
+    return {"triangles_target": triangles, "triangles": built["triangles"], "method": f"cycles {samples} spp",
+            "seconds": bake["seconds"], "peak_mb": high_water_mb(),
+            "texels": int(sum(w * h for w, h in sizes.values()))}
