@@ -34,18 +34,22 @@ def plot(path: Path, runs: list[dict]) -> None:
     import matplotlib.pyplot as plt
 
     figure, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8))
-    for method in dict.fromkeys(run["method_asked"] for run in runs if not run["method_asked"].startswith("cycles")):
-        done = sorted((run for run in runs if run["method_asked"] == method and "stage_seconds" in run),
-                      key=lambda run: run["triangles"])
-        names = list(dict.fromkeys(name for run in done for name in run["stage_seconds"]))
-        colours = plt.get_cmap("tab20")
-        for k, name in enumerate(names):
+    ours = [run for run in runs if not run["method_asked"].startswith("cycles") and "stage_seconds" in run]
+    names = list(dict.fromkeys(name for run in ours for name in run["stage_seconds"]))  # one colour per stage
+    colours = plt.get_cmap("tab20")
+    labelled = set()
+    for m, method in enumerate(dict.fromkeys(run["method_asked"] for run in ours)):
+        done = sorted((run for run in ours if run["method_asked"] == method), key=lambda run: run["triangles"])
+        for name in dict.fromkeys(name for run in done for name in run["stage_seconds"]):
+            k = names.index(name)
             points = [(run["triangles"], run["stage_seconds"].get(name), run["stage_peak_mb"].get(name)) for run in done
                       if name in run["stage_seconds"]]
             x = [p[0] for p in points]
-            style = {"marker": "o", "color": colours(k % 20), "linestyle": ("-", "--", ":")[k // 7 % 3]}
-            left.plot(x, [max(p[1], 1e-3) for p in points], label=f"{name}", **style)
-            right.plot(x, [p[2] for p in points], label=f"{name}", **style)
+            style = {"marker": "os^"[m % 3], "color": colours(k % 20), "linestyle": ("-", "--", ":")[k // 7 % 3],
+                     "label": None if name in labelled else name}
+            labelled.add(name)
+            left.plot(x, [max(p[1], 1e-3) for p in points], **style)
+            right.plot(x, [p[2] for p in points], **style)
         left.plot([run["triangles"] for run in done], [run["seconds"] for run in done], "k--", marker="s",
                   label=f"whole bake ({method})")
     for method in dict.fromkeys(run["method_asked"] for run in runs if run["method_asked"].startswith("cycles")):

@@ -19,9 +19,10 @@ and a half-lit cluster from its lit half), seen from the eye patch's visibility 
 member's residual is cleared by the shot and no member receives from it. That is exact for far
 receivers and approximate within about a cell, so only weak clusters shoot as one
 (`ClusteredSelection`): a patch shoots with the coarsest of its clusters whose power is under
-CLUSTER_POWER × the emitted light / the coarsest level's cluster count, or alone (the sun's patch
-on the floor, a wall beside a lamp). One bound for every level: a finer cluster is smaller, so
-at the same power it errs less than a coarser one that already shoots as one.
+CLUSTER_POWER × the emitted light / the coarsest level's cluster count (× tolerance /
+CLUSTER_TOLERANCE below draft's tolerance), or alone (the sun's patch on the floor, a wall beside
+a lamp). One bound for every level: a finer cluster is smaller, so at the same power it errs less
+than a coarser one that already shoots as one.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from .selection import strongest
 NORMAL_BINS = 8  # per side of the octahedral grid of normal directions
 CELL_GROWTH = 1.25  # ratio between the cell sizes tried
 CLUSTER_POWER = 1.0  # a cluster shoots as one below this many mean cluster powers of the emitted light
+CLUSTER_TOLERANCE = 3e-2  # ... at this tolerance (draft's) or above; at a finer one, that share of it
 MAX_CLUSTER_LEVELS = 7  # nested levels of clusters at most, each cell twice the next finer one's (shot.glsl's PatchPlane holds 7)
 FINEST_MEMBERS = 2.0  # levels are added until a cluster of the finest holds this many patches on average
 PLANE_SLAB = 0.125  # members lie within this many cells of one plane (a painting and the wall behind it part)
@@ -187,9 +189,11 @@ class ClusteredSelection:
     the strongest of these candidates shoot. A strong coarse cluster thus splits into finer ones
     before it splits into patches."""
 
-    def __init__(self, patches: Patches, levels: list[PatchClusters], emitted: float):
+    def __init__(self, patches: Patches, levels: list[PatchClusters], emitted: float,
+                 tolerance: float = CLUSTER_TOLERANCE):
         self.levels = levels
-        self.threshold = CLUSTER_POWER * emitted / len(levels[-1])
+        # a finer tolerance asks for less of the clusters' approximation too
+        self.threshold = CLUSTER_POWER * emitted / len(levels[-1]) * min(1.0, tolerance / CLUSTER_TOLERANCE)
         self.area = patches.area
         self.shooters = [ClusterShooters(patches, level, k) for k, level in enumerate(levels, start=1)]
 

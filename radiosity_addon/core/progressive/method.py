@@ -126,7 +126,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
         emitted_total = float(ledger.emitted.sum())
         # a cluster shoots as one while its power is under CLUSTER_POWER mean clusters' shares of the light
         # (clusters.ClusteredSelection)
-        selection = None if clusters is None else ClusteredSelection(patches, clusters, emitted_total)
+        selection = None if clusters is None else ClusteredSelection(patches, clusters, emitted_total, tolerance)
         cluster_shots = 0
 
         shots = batches = 0
