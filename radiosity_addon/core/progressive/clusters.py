@@ -184,10 +184,10 @@ class ClusterShooters:
 class ClusteredSelection:
     """The next shooters when patches cluster, in `levels` (finest first, each nested in the next):
     each patch shoots with the coarsest of its clusters that is weak — two members or more, power
-    under CLUSTER_POWER × the emitted light / the coarsest level's cluster count — or alone when
-    none is;
-    the strongest of these candidates shoot. A strong coarse cluster thus splits into finer ones
-    before it splits into patches."""
+    under CLUSTER_POWER × the emitted light / the coarsest level's cluster count (× tolerance /
+    CLUSTER_TOLERANCE below draft's tolerance) — or alone when none is; the strongest of these
+    candidates shoot. A strong coarse cluster thus splits into finer ones before it splits into
+    patches."""
 
     def __init__(self, patches: Patches, levels: list[PatchClusters], emitted: float,
                  tolerance: float = CLUSTER_TOLERANCE):
