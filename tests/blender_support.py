@@ -102,6 +102,7 @@ def node_tree_state(tree) -> dict:
 def blend_state() -> dict:
     """Everything a bake may touch, as plain data: equal states mean an unchanged file."""
     return {
+        "scenes": sorted(scene.name for scene in bpy.data.scenes),
         "images": sorted(image.name for image in bpy.data.images),
         "materials": {m.name: {"tree": node_tree_state(m.node_tree), "properties": sorted(m.keys())}
                       for m in bpy.data.materials},

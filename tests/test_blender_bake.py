@@ -9,8 +9,11 @@ import bpy
 import numpy as np
 import pytest
 
-from radiosity_addon.blender.bake import bake_blocking
-from radiosity_addon.blender.material_bake import bake_material_maps
+from radiosity_addon.blender.bake import bake_blocking, baked_materials
+from radiosity_addon.blender.export import export_scene
+from radiosity_addon.blender.lightmap_uv import add_lightmap_uvs
+from radiosity_addon.blender.lights import render_lamps
+from radiosity_addon.blender.material_bake import bake_material_maps, is_uniform
 from radiosity_addon.core import SolveCancelled
 
 
@@ -70,6 +73,48 @@ def test_two_bakes_leave_one_image_per_object_and_no_extra_materials():
     assert second["images"] == first["images"] == sorted(f"{o.name}_lightmap" for o in mesh_objects())
     assert sorted(second["materials"]) == sorted(first["materials"])
     assert second == first
+
+
+def test_uniform_materials_are_probed_once_and_only_varying_ones_get_maps():
+    context = support.open_blend(support.CORNELL)
+    baked = list(context.selected_objects)
+    add_lightmap_uvs(context, baked, context.scene.radiosity.uv_margin)  # as the bake does first
+    floor, tall = bpy.data.objects["floor"], bpy.data.objects["tall_block"]
+    assert all(is_uniform(slot.material) for obj in baked for slot in obj.material_slots) and is_uniform(None)
+    # Cycles' own albedo of the floor, baked into a map the way a textured object's is
+    floor_albedo = bake_material_maps(context, [floor], {"floor": (8, 8)})["floor"].albedo.mean(axis=(0, 1))
+    # the tall block's material becomes a checker (a linked Base Color): it needs a map
+    checker_material = tall.material_slots[0].material.copy()
+    tall.material_slots[0].link, tall.material_slots[0].material = "OBJECT", checker_material
+    tree = checker_material.node_tree
+    principled = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    tree.links.new(checker.outputs["Color"], principled.inputs["Base Color"])
+    assert not is_uniform(checker_material)
+    mix = bpy.data.materials.new("mix of two diffuse shaders")
+    if mix.node_tree is None:  # Blender 4.x makes the node tree on request
+        mix.use_nodes = True
+    nodes = mix.node_tree.nodes
+    output = next(n for n in nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    shader = nodes.new("ShaderNodeMixShader")
+    for socket in (1, 2):
+        mix.node_tree.links.new(nodes.new("ShaderNodeBsdfDiffuse").outputs[0], shader.inputs[socket])
+    mix.node_tree.links.new(shader.outputs[0], output.inputs["Surface"])
+    assert is_uniform(mix)
+    mix.node_tree.links.new(nodes.new("ShaderNodeFresnel").outputs[0], shader.inputs["Fac"])
+    assert not is_uniform(mix)
+
+    options = context.scene.radiosity.bake_options(baked)
+    exported = export_scene(context.evaluated_depsgraph_get(), baked, lamps=render_lamps(context.view_layer),
+                            world=context.scene.world)
+    before = support.blend_state()
+    scene, _ = baked_materials(context, exported, baked, options)
+    assert support.blend_state() == before  # probes, their scene and images are gone again
+    assert list(scene.material_maps) == ["tall_block"]
+    faces = scene.object_index == scene.object_names.index("floor")
+    np.testing.assert_allclose(scene.reflectance[faces], np.broadcast_to(floor_albedo, (faces.sum(), 3)), atol=1e-3)
+    light = scene.object_index == scene.object_names.index("light")
+    assert np.all(scene.emission[light] > 1) and np.all(scene.emission[~light] == 0)
 
 
 @pytest.mark.parametrize("sample", [support.CORNELL, support.ROOM], ids=["cornell", "room"])

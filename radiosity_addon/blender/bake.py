@@ -12,6 +12,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from .. import core
 from ..core import USER_ERRORS as CORE_USER_ERRORS
 from ..core import SolveCancelled, SolveError
@@ -19,7 +21,7 @@ from . import apply
 from .errors import BakeError
 from .export import check_emitters, export_scene
 from .lightmap_uv import add_lightmap_uvs, remove_lightmap_uvs
-from .material_bake import bake_material_maps, principled_diffuse_factors
+from .material_bake import bake_material_maps, principled_diffuse_factors, uniform_material_values, uniform_materials
 from .lights import render_lamps
 from .live_preview import LivePreview
 from .options import BakeOptions
@@ -94,15 +96,34 @@ def prepare(context, options: BakeOptions, objects=None, output_dir=None, previe
 
 
 def baked_materials(context, exported, baked, options: BakeOptions):
-    """The exported scene with its baked objects' material maps (Cycles' own albedo and emission),
-    and the diffuse factors of their Principled BSDFs for a "light" lightmap's baked look."""
-    sizes = core.lightmap_sizes(exported.scene, options.lightmaps, exported.baked_objects)
+    """The exported scene with Cycles' own albedo and emission: probed once per uniform material
+    (every face made of one), baked into material maps for the baked objects with any other
+    material; and the diffuse factors of their Principled BSDFs for a "light" lightmap's baked look."""
+    scene = exported.scene
+    names = list(set(exported.face_materials))  # each face's material as an index into `names`
+    face_material = np.frompyfunc({name: k for k, name in enumerate(names)}.__getitem__, 1, 1)(
+        exported.face_materials).astype(np.int64)
     try:
-        maps = bake_material_maps(context, baked, sizes)
-        factors = principled_diffuse_factors(context, baked) if options.lightmaps.content == "light" else {}
+        uniform = uniform_materials(names)
+        face_uniform = np.isin(face_material, [k for k, name in enumerate(names) if name in uniform])
+        object_mapped = np.zeros(len(scene.object_names), dtype=bool)
+        np.logical_or.at(object_mapped, scene.object_index, ~face_uniform)
+        mapped = [obj for obj in baked if object_mapped[scene.object_names.index(obj.name)]]
+        probed = face_uniform & ~object_mapped[scene.object_index]
+        probed_names = [names[k] for k in np.unique(face_material[probed])]
+        values = uniform_material_values([uniform[name] for name in probed_names])
+        sizes = core.lightmap_sizes(scene, options.lightmaps, [obj.name for obj in mapped]) if mapped else {}
+        maps = bake_material_maps(context, mapped, sizes)
+        factors = principled_diffuse_factors(baked) if options.lightmaps.content == "light" else {}
     except RuntimeError as error:  # Cycles refused (a message of its own)
         raise BakeError(f"Cycles could not bake the materials: {str(error).strip().splitlines()[-1]}") from None
-    scene = dataclasses.replace(exported.scene, material_maps=maps)
+    reflectance, emission = scene.reflectance.copy(), scene.emission.copy()
+    for name in probed_names:
+        albedo, emitted = values[name]
+        faces = probed & (face_material == names.index(name))
+        reflectance[faces] = np.clip(albedo, 0.0, core.MAX_REFLECTANCE)
+        emission[faces] = np.maximum(emitted, 0.0)
+    scene = dataclasses.replace(scene, reflectance=reflectance, emission=emission, material_maps=maps)
     check_emitters(scene)
     return scene, factors
 

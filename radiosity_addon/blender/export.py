@@ -30,6 +30,7 @@ from .tags import LIGHTMAP_UV
 class ExportedScene:
     scene: Scene
     baked_objects: list[str]  # objects that get a lightmap
+    face_materials: np.ndarray | None = None  # (surfaces,) object: each surface's material name (None: no material)
     instances: int = 0  # instanced geometries in the light transport (they get no lightmap)
     warnings: list[str] = field(default_factory=list)
 
@@ -48,6 +49,7 @@ class MeshFaces:
     uv: np.ndarray  # (F, 4, 2) Lightmap UVs (zeros for occluders)
     reflectance: np.ndarray  # (F, 3)
     emission: np.ndarray  # (F, 3)
+    material: np.ndarray  # (F,) object: the material's name, None where the face has none
 
 
 GEOMETRY_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}  # object types Cycles renders as meshes
@@ -142,9 +144,10 @@ class MeshExporter:
         emission = np.stack([c[1] for c in colours])
         slot = material_index[face_polygon]
         slot = np.where((slot >= 0) & (slot < len(slots)), slot, len(slots))  # no such slot: the default material
+        names = np.array([s.material.name if s.material is not None else None for s in slots] + [None], dtype=object)
         return MeshFaces(corners=positions[loop_vertex[face_loops]], corner_count=face_count.astype(np.int64),
                          uv=uv[face_loops] if uv is not None else np.zeros(face_loops.shape + (2,)),
-                         reflectance=reflectance[slot], emission=emission[slot])
+                         reflectance=reflectance[slot], emission=emission[slot], material=names[slot])
 
     def scene(self, extras: dict) -> Scene:
         names, object_index = [], []
@@ -209,6 +212,8 @@ def export_scene(depsgraph, baked, occluders=None, lamps=(), world=None) -> Expo
         raise BakeError("nothing to bake: the selected objects have no faces")
     extras, light_warnings = export_lights(depsgraph, lamps, world)
     scene = exporter.scene(extras)
-    return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked], instances=exporter.instances,
+    face_materials = np.concatenate([faces.material for _, _, faces in exporter.meshes])
+    return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked], face_materials=face_materials,
+                         instances=exporter.instances,
                          warnings=baked_reader.warnings + exporter.materials.warnings + exporter.warnings
                          + light_warnings)
