@@ -98,9 +98,11 @@ def main() -> int:
     lightmaps = {}
     for k, text in enumerate(args.runs):
         run = json.loads(text)
+        solve = {key: value for key, value in run.items() if key != "lightmaps"}
         load = os.getloadavg()[0]
         started = time.perf_counter()
-        _, report = bake_file(HeadlessBake(str(path), solve_options=run, lightmap_options={"content": "combined"},
+        _, report = bake_file(HeadlessBake(str(path), solve_options=solve,
+                                           lightmap_options={**run.get("lightmaps", {}), "content": "combined"},
                                            output_dir=str(out / f"run{k}")))
         seconds = time.perf_counter() - started
         names = [obj.name for obj in bpy.context.scene.objects if obj.type == "MESH"]

@@ -131,6 +131,7 @@ class LightmapSettings:
     content: str = "light"  # "light": H, shown as emission + albedo x lightmap; "combined": B = E + ρH
     direct_per_texel: bool = True  # lamps' and emitters' light recomputed at every texel (sharp shadows)
     direct_map_resolution: int = 1024  # pixels across the visibility maps of that direct light
+    direct_pieces: int = 8  # emissive polygons and area lamps shoot that light in up to N x N pieces (penumbrae)
 
     @classmethod
     def preset(cls, quality: str = "good", **given) -> "LightmapSettings":
@@ -146,3 +147,5 @@ class LightmapSettings:
             raise SolveError(f"unknown lightmap content '{self.content}' (choose {', '.join(CONTENTS)})")
         if self.max_size < MIN_LIGHTMAP_SIZE:
             raise SolveError(f"the lightmap size cap must be at least {MIN_LIGHTMAP_SIZE}, got {self.max_size}")
+        if not 1 <= self.direct_pieces <= 16:
+            raise SolveError(f"direct light pieces per side must be 1..16, got {self.direct_pieces}")

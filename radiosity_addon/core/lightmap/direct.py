@@ -32,10 +32,10 @@ def texel_points(gpu: GPU, patches: Patches, rows: np.ndarray, corners_texels: n
 
 
 def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray,
-                 visibility: str, resolution: int, occlusion: bool) -> tuple[np.ndarray, int]:
+                 visibility: str, resolution: int, occlusion: bool, pieces: int) -> tuple[np.ndarray, int]:
     """(N, 3) direct light H at `points` (N, 3) lying on the patches `owners` (N,), and the
-    number of shots."""
-    shooters = direct_shooters(scene, patches)
+    number of shots (emitters and area lamps in up to `pieces` x `pieces` each)."""
+    shooters = direct_shooters(scene, patches, pieces)
     variant = visibility if visibility in VISIBILITY_VARIANTS else "hemicube"
     with gpu.resources() as res:
         light = light_at_points(res, scene, patches, points, owners, shooters, variant, resolution, occlusion)

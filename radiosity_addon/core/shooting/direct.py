@@ -43,9 +43,11 @@ def has_direct_light(scene: Scene) -> bool:
     return bool(scene.lamps) or bool(np.any(scene.world_color > 0))
 
 
-def lamps_as_shooters(scene: Scene) -> list[Shooter]:
+def lamps_as_shooters(scene: Scene, max_split: int = AREA_LAMP_MAX_SPLIT) -> list[Shooter]:
+    """Every lamp's shots (an area lamp in at most `max_split` x `max_split` pieces)."""
     low, high = scene.bounds
-    return [shooter for lamp in scene.lamps for shooter in lamp_shooters(lamp, (low + high) / 2, scene.diameter)]
+    return [shooter for lamp in scene.lamps
+            for shooter in lamp_shooters(lamp, (low + high) / 2, scene.diameter, max_split)]
 
 
 def emitter_pieces(scene: Scene, patches: Patches, occlusion: bool = True,
@@ -84,13 +86,15 @@ def emitting_polygons(scene: Scene, patches: Patches) -> list[tuple[np.ndarray, 
     return polygons
 
 
-def direct_shooters(scene: Scene, patches: Patches) -> list[Shooter]:
-    """Every shot of the lightmaps' direct light: the lamps', and the emitting polygons' in pieces
-    (one piece each when there are more than MAX_SPLIT_EMITTERS of them)."""
+def direct_shooters(scene: Scene, patches: Patches, max_split: int = AREA_LAMP_MAX_SPLIT) -> list[Shooter]:
+    """Every shot of the lightmaps' direct light: the lamps', and the emitting polygons' in pieces,
+    at most `max_split` x `max_split` each (one piece each when there are more than
+    MAX_SPLIT_EMITTERS of them)."""
     polygons = emitting_polygons(scene, patches)
     size = scene.diameter if len(polygons) <= MAX_SPLIT_EMITTERS else np.inf
-    return lamps_as_shooters(scene) + [piece for corners, emission, patch, _ in polygons
-                                       for piece in polygon_shooters(corners, emission, size, patch=patch)]
+    return lamps_as_shooters(scene, max_split) + [
+        piece for corners, emission, patch, _ in polygons
+        for piece in polygon_shooters(corners, emission, size, patch=patch, max_split=max_split)]
 
 
 def shoot_lamps(scene: Scene, shooting: ShootingPass) -> DirectLightWork:

@@ -15,7 +15,8 @@ AREA_LAMP_PIECE = 1 / 64  # longest side of an area lamp's or emitter's pieces, 
 AREA_LAMP_MAX_SPLIT = 8  # pieces per side at most
 
 
-def lamp_shooters(lamp: Lamp, scene_centre: np.ndarray, scene_diameter: float) -> list[Shooter]:
+def lamp_shooters(lamp: Lamp, scene_centre: np.ndarray, scene_diameter: float,
+                  max_split: int = AREA_LAMP_MAX_SPLIT) -> list[Shooter]:
     """The shots of one lamp (see the module doc)."""
     if lamp.type in ("point", "spot"):
         cone = lamp.type == "spot"
@@ -31,7 +32,7 @@ def lamp_shooters(lamp: Lamp, scene_centre: np.ndarray, scene_diameter: float) -
         return [Shooter(position=eye, axes=(*tangent_frame(lamp.direction), lamp.direction),
                         polygon=np.zeros((4, 3)), area=0.0, radiosity=lamp.color * lamp.strength, kind=DIRECTIONAL,
                         light_direction=tuple(lamp.direction), ortho_extent=scene_diameter / 2)]
-    return polygon_shooters(lamp.vertices, lamp.area_radiance, scene_diameter)
+    return polygon_shooters(lamp.vertices, lamp.area_radiance, scene_diameter, max_split=max_split)
 
 
 def polygon_shooters(corners: np.ndarray, radiance: np.ndarray, scene_diameter: float, patch: int = -1,
