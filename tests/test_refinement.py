@@ -101,7 +101,8 @@ def test_each_round_probes_only_the_patches_it_made_and_the_probe_is_the_ray_cas
     """Refinement's probe (the texel pass at element centres) against a ray-cast reference on the
     box scene of test_texel_light, and after a split: the patches a round left alone are found
     (corners, surface, side), and the light they carry over is what probing them again gives."""
-    from test_texel_light import box_faces, occluded_emitter_light
+    from scenes import box_faces
+    from test_texel_light import occluded_emitter_light
 
     from radiosity_addon.core.refinement import probe_light, probe_shooters, unchanged_patches
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scenes import surface
+from scenes import box_faces, surface
 
 from radiosity_addon.core import (LightmapSettings, SolveSettings, bake_lightmaps, point_to_polygon,
                                   scene_from_dict, solve)
@@ -71,15 +71,6 @@ def test_a_suns_shadow_is_as_sharp_as_the_lightmap(gpu):
     assert np.all(np.abs(direct[clear & ~shadowed] - lit_value) < 0.05 * lit_value + 0.05)
     assert light[clear & shadowed].max() < 0.1 * lit_value
     assert (clear & shadowed).sum() > 200
-
-
-def box_faces(low, high) -> list:
-    """The six outward faces of the axis-aligned box [low, high], counter-clockwise from outside."""
-    x0, y0, z0 = low
-    x1, y1, z1 = high
-    return [[[x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]], [[x0, y0, z0], [x0, y1, z0], [x1, y1, z0], [x1, y0, z0]],
-            [[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1]], [[x1, y1, z0], [x0, y1, z0], [x0, y1, z1], [x1, y1, z1]],
-            [[x0, y1, z0], [x0, y0, z0], [x0, y0, z1], [x0, y1, z1]], [[x1, y0, z0], [x1, y1, z0], [x1, y1, z1], [x1, y0, z1]]]
 
 
 def occluded_emitter_light(points, emitter_corners, emission, box_low, box_high, samples=48):

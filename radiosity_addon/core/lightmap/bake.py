@@ -29,6 +29,7 @@ from ..settings import LightmapSettings
 from ..solution import Solution
 from ..uvspace import rasterize
 from . import charts
+from .contact import in_contact
 from .direct import direct_light, texel_points
 from .lattice import continuous_lattice, element_values
 from .mips import filled_image, mip_levels
@@ -187,10 +188,11 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
             if not (signed_ids != 0).any():
                 raise SolveError(f"object '{name}': its faces cover no texel of a {size[0]}x{size[1]}"
                                  " lightmap; raise the texel density or its resolution")
-            points = texel_points(lightmap_gpu, patches, mine, corners_texels, size) if per_texel else None
+            points = texel_points(lightmap_gpu, patches, mine, corners_texels, size)
             rasters[name] = (texel_values.astype(np.float64), signed_ids, mine, points)
         if per_texel:
             add_direct_light(lightmap_gpu, solution, rasters, settings)
+        clear_contacts(scene, patches, rasters, holds_b=~mapped if not (per_texel or light) else None)
     lightmaps = {}
     for name, (texel_values, signed_ids, mine, points) in rasters.items():
         size, indices = layouts.sizes[name], objects[name]
@@ -211,6 +213,25 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     return lightmaps
 
 
+def clear_contacts(scene: Scene, patches, rasters: dict, holds_b: np.ndarray | None) -> None:
+    """Texels under a face touching theirs see nothing (`contact`): their light H becomes 0, and
+    B = E where a texel holds the interpolated B (`holds_b` per patch; None: nowhere)."""
+    owners = {name: entry[3][1][entry[3][2]] for name, entry in rasters.items()}
+    points = np.concatenate([entry[3][0][entry[3][2]] for entry in rasters.values()])
+    touched = in_contact(scene, points, patches.surface[np.concatenate(list(owners.values()))])
+    start = 0
+    for name, (texel_values, _, _, (_, _, covered)) in rasters.items():
+        mine = touched[start:start + len(owners[name])]
+        start += len(owners[name])
+        owner = owners[name][mine]
+        cleared = np.zeros((len(owner), texel_values.shape[-1]))
+        if holds_b is not None:
+            cleared = np.where(holds_b[owner][:, None], patches.emission[owner], 0.0)
+        values = texel_values[covered]
+        values[mine] = cleared
+        texel_values[covered] = values
+
+
 def add_direct_light(gpu: GPU, solution: Solution, rasters: dict, settings: LightmapSettings) -> None:
     """Add every lightmap's direct light texel by texel (one pass over all texels per shot)."""
     covered = {name: entry[3][2] for name, entry in rasters.items()}
@@ -218,7 +239,7 @@ def add_direct_light(gpu: GPU, solution: Solution, rasters: dict, settings: Ligh
     owners = np.concatenate([entry[3][1][covered[name]] for name, entry in rasters.items()])
     report = solution.report
     light, _ = direct_light(gpu, solution.scene, solution.patches, points, owners, report.settings.visibility,
-                            settings.direct_map_resolution, report.effects.occlusion)
+                            settings.direct_map_resolution, report.effects.occlusion, settings.direct_pieces)
     start = 0
     for name, (texel_values, _, _, _) in rasters.items():
         count = int(covered[name].sum())

@@ -1,0 +1,97 @@
+"""Texels in contact: a texel whose point lies on a face of other geometry that touches its own
+face to face — the underside of a ceiling slab over the walls' tops, a wall's foot on the floor, a
+book's bottom on its shelf — sees nothing but the back of what touches it. Cycles bakes it black;
+without this test it would take its patch's interpolated light (a leak through the contact).
+
+Touching faces are found among nearby faces (`scene.neighbours.near_pairs`, linear in the scene):
+fronts facing each other (normals opposite within PARALLEL) on one plane (within
+CONTACT_DISTANCE of the scene's diameter: an emitter hung 2 cm under a ceiling does not touch it).
+A texel is in contact when its point lies inside such a partner's polygon."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene import Scene
+from ..scene.neighbours import near_pairs
+
+CONTACT_DISTANCE = 1e-4  # planes closer than this (times the scene's diameter) touch
+PARALLEL = 0.999  # -cos between the normals of two faces that touch face to face
+POINT_CHUNK = 1 << 20  # (texel, partner) tests at once
+
+
+def touching_faces(scene: Scene, surfaces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(surface, partner) pairs: `surfaces` (some of the scene's) and the faces touching their
+    fronts face to face."""
+    corners = scene.corners
+    centre = corners.mean(axis=1)
+    radius = np.linalg.norm(corners - centre[:, None], axis=2).max(axis=1)
+    tolerance = CONTACT_DISTANCE * scene.diameter
+    normal = scene.normal
+    found_surface, found_partner = [], []
+    for query, other in near_pairs(centre, radius + tolerance, surfaces, radius[surfaces] + tolerance):
+        surface = surfaces[query]
+        facing = np.einsum("ij,ij->i", normal[surface], normal[other]) < -PARALLEL
+        apart = np.abs(np.einsum("ij,ij->i", corners[other, 0] - corners[surface, 0], normal[surface]))
+        keep = facing & (apart < tolerance) & (other != surface)
+        found_surface.append(surface[keep])
+        found_partner.append(other[keep])
+    if not found_surface:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    return np.concatenate(found_surface), np.concatenate(found_partner)
+
+
+def inside_polygons(points: np.ndarray, corners: np.ndarray, normals: np.ndarray, tolerance: float) -> np.ndarray:
+    """(N,) whether each point (N, 3) projects inside its convex polygon (N, 4, 3) (a triangle
+    repeats its last corner) along its normal (N, 3), `tolerance` past the edges counting inside."""
+    inside = np.ones(len(points), dtype=bool)
+    for k in range(4):  # edge k: n . (edge x (p - corner)) >= -tolerance |edge|
+        edge = corners[:, (k + 1) % 4] - corners[:, k]
+        to_point = points - corners[:, k]
+        side = (normals[:, 0] * (edge[:, 1] * to_point[:, 2] - edge[:, 2] * to_point[:, 1])
+                + normals[:, 1] * (edge[:, 2] * to_point[:, 0] - edge[:, 0] * to_point[:, 2])
+                + normals[:, 2] * (edge[:, 0] * to_point[:, 1] - edge[:, 1] * to_point[:, 0]))
+        inside &= side >= -tolerance * np.sqrt((edge * edge).sum(axis=1))
+    return inside
+
+
+def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray) -> np.ndarray:
+    """(N,) whether each point (N, 3), lying on the front of its surface `surfaces` (N,), is
+    covered by a face touching that front."""
+    covered = np.zeros(len(points), dtype=bool)
+    if len(points) == 0:
+        return covered
+    touched, partner = touching_faces(scene, np.unique(surfaces))
+    if len(touched) == 0:
+        return covered
+    # each surface's points sorted along one axis in its plane (its longest), so that a partner
+    # meets only the points across its own extent on that axis: a foot tests the floor's texels
+    # in a strip, not all of them
+    low, high = scene.corners.min(axis=1), scene.corners.max(axis=1)
+    extent = np.where(np.abs(scene.normal) > 0.5, -1.0, high - low)
+    axis = np.argmax(extent, axis=1)
+    scale = np.maximum(np.take_along_axis(high - low, axis[:, None], 1)[:, 0], 1e-30) * (1 + 1e-9)
+    origin = np.take_along_axis(low, axis[:, None], 1)[:, 0]
+
+    def keys(owner, coordinate):
+        return owner + np.clip((coordinate - origin[owner]) / scale[owner], 0.0, 1.0 - 1e-9)
+
+    point_keys = keys(surfaces, np.take_along_axis(points, axis[surfaces][:, None], 1)[:, 0])
+    order = np.argsort(point_keys, kind="stable")
+    sorted_keys = point_keys[order]
+    tolerance = CONTACT_DISTANCE * scene.diameter
+    along = axis[touched]
+    partner_low = np.take_along_axis(low[partner], along[:, None], 1)[:, 0] - tolerance
+    partner_high = np.take_along_axis(high[partner], along[:, None], 1)[:, 0] + tolerance
+    start = np.searchsorted(sorted_keys, keys(touched, partner_low), side="left")
+    count = np.searchsorted(sorted_keys, keys(touched, partner_high), side="right") - start
+    done = 0
+    while done < len(touched):
+        stop = done + max(1, int(np.searchsorted(np.cumsum(count[done:]), POINT_CHUNK, side="right")))
+        n = count[done:stop]
+        pair = np.repeat(np.arange(done, stop), n)
+        point = order[np.repeat(start[done:stop] - np.concatenate([[0], np.cumsum(n)[:-1]]), n) + np.arange(n.sum())]
+        hit = inside_polygons(points[point], scene.corners[partner[pair]], scene.normal[partner[pair]], tolerance)
+        covered[point[hit]] = True
+        done = stop
+    return covered
