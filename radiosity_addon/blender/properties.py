@@ -86,7 +86,7 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
                      if obj.radiosity.lightmap_resolution > 0}
         quality = "good" if self.quality == "CUSTOM" else self.quality
         if self.quality == "CUSTOM":
-            solve = SolveSettings(method=self.method,
+            solve = SolveSettings(method=self.method, quality=quality,
                                   subdiv=self.subdivision if self.patch_mode == "SUBDIVISION" else None,
                                   patch_size=self.patch_size, elements=int(self.elements),
                                   hemicube_res=self.hemicube_resolution, solver=self.solver,
