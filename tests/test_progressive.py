@@ -305,9 +305,9 @@ def test_cli_progressive_writes_elements_and_report(tmp_path):
     from radiosity_addon.cli import main
 
     out, report = tmp_path / "out.npz", tmp_path / "report.json"
-    status = main(["solve", "cornell-box", "--subdiv", "2", "--elements", "2", "--tolerance", "0.05",
-                   "--visibility", "tessellated", "--kernel", "disk", "--output", str(out), "--report", str(report),
-                   "--quiet"])
+    status = main(["solve", "cornell-box", "--method", "progressive", "--subdiv", "2", "--elements", "2",
+                   "--tolerance", "0.05", "--visibility", "tessellated", "--kernel", "disk", "--output", str(out),
+                   "--report", str(report), "--quiet"])
     assert status == 0
     arrays = np.load(out)
     assert arrays["element_radiosity"].shape == (len(arrays["patch_area"]), 2, 2, 3)
