@@ -14,7 +14,7 @@ DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, timed when baked.
 (bench/compare.py) gives the texel RMS over all texels and over those inside the room (a room of
 bench/rooms.py; elsewhere the same), and the worst object's mean. `--densities` then times the
 first run and Cycles at the first `--cycles` samples at other texel densities. Writes
-DIR/presets.json.
+DIR/presets.json and DIR/presets.png (error against time; `--replot` redraws it from the json).
 """
 
 from __future__ import annotations
@@ -78,6 +78,39 @@ def density_sweep(path: Path, run: dict, samples: int, densities: list[float], o
     return rows
 
 
+def plot(path: Path, record: dict) -> None:
+    """Texel error against the bake's seconds: our runs as points, Cycles' as a line through its
+    sample counts (its error falls as 1/sqrt(samples), its time grows with them)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker
+
+    figure, axis = plt.subplots(figsize=(6.4, 4.4))
+    cycles = sorted((run for run in record["runs"] if run["method"] == "cycles"), key=lambda run: run["seconds"])
+    if cycles:
+        axis.plot([run["seconds"] for run in cycles], [100 * run["texel_rms"] for run in cycles], "-.D", color="grey",
+                  label="Cycles")
+        for run in cycles:
+            axis.annotate(run["label"].replace("Cycles ", ""), (run["seconds"], 100 * run["texel_rms"]), fontsize=7,
+                          xytext=(4, 4), textcoords="offset points")
+    for run in (run for run in record["runs"] if run["method"] != "cycles"):
+        axis.plot(run["seconds"], 100 * run["texel_rms"], "o", label=f"{run['label']} ({run['method']})")
+    axis.set_xscale("log")
+    axis.set_yscale("log")
+    for ticks in (axis.xaxis, axis.yaxis):  # plain numbers, not powers of ten
+        ticks.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+        ticks.set_minor_formatter(matplotlib.ticker.FuncFormatter(
+            lambda value, _: f"{value:g}" if f"{value:e}"[0] in "235" else ""))
+    axis.set_xlabel("seconds, whole bake (2 cores, llvmpipe)")
+    axis.set_ylabel("texel relative RMS against Cycles' reference, %")
+    axis.set_title(Path(record["file"]).name)
+    axis.grid(True, which="both", alpha=0.3)
+    axis.legend(fontsize=7)
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("file", type=Path)
@@ -89,8 +122,12 @@ def main() -> int:
     parser.add_argument("--densities", type=float, nargs="*", default=[],
                         help="then time the first run and Cycles at the first --cycles samples at these texel"
                              " densities (texels per unit): how each one's cost grows with the lightmaps' texels")
+    parser.add_argument("--replot", action="store_true", help="only redraw DIR/presets.png from DIR/presets.json")
     args = parser.parse_args()
     out = args.output_dir
+    if args.replot:
+        plot(out / "presets.png", json.loads((out / "presets.json").read_text()))
+        return 0
     out.mkdir(parents=True, exist_ok=True)
     path, is_room = with_lightmap_uvs(args.file, out / args.file.name)
     record: dict = {"file": str(args.file), "baked": str(path), "machine": {"cpus": os.cpu_count()}, "runs": []}
@@ -140,7 +177,8 @@ def main() -> int:
     if args.densities:
         record["densities"] = density_sweep(path, json.loads(args.runs[0]), args.cycles[0], args.densities, out)
     (out / "presets.json").write_text(json.dumps(record, indent=1, default=float))
-    log(f"wrote {out / 'presets.json'}")
+    plot(out / "presets.png", record)
+    log(f"wrote {out / 'presets.json'} and presets.png")
     return 0
 
 

@@ -20,7 +20,7 @@ member's residual is cleared by the shot and no member receives from it. That is
 receivers and approximate within about a cell, so only weak clusters shoot as one
 (`ClusteredSelection`): a patch shoots with the coarsest of its clusters whose power is under
 CLUSTER_POWER × the emitted light / the coarsest level's cluster count (× tolerance /
-CLUSTER_TOLERANCE below draft's tolerance), or alone (the sun's patch on the floor, a wall beside
+CLUSTER_TOLERANCE below that tolerance), or alone (the sun's patch on the floor, a wall beside
 a lamp). One bound for every level: a finer cluster is smaller, so at the same power it errs less
 than a coarser one that already shoots as one.
 """
@@ -39,7 +39,7 @@ from .selection import strongest
 NORMAL_BINS = 8  # per side of the octahedral grid of normal directions
 CELL_GROWTH = 1.25  # ratio between the cell sizes tried
 CLUSTER_POWER = 1.0  # a cluster shoots as one below this many mean cluster powers of the emitted light
-CLUSTER_TOLERANCE = 3e-2  # ... at this tolerance (draft's) or above; at a finer one, that share of it
+CLUSTER_TOLERANCE = 3e-2  # ... at this tolerance or above (where it was measured); at a finer one, that share
 MAX_CLUSTER_LEVELS = 7  # nested levels of clusters at most, each cell twice the next finer one's (shot.glsl's PatchPlane holds 7)
 FINEST_MEMBERS = 2.0  # levels are added until a cluster of the finest holds this many patches on average
 PLANE_SLAB = 0.125  # members lie within this many cells of one plane (a painting and the wall behind it part)
@@ -185,7 +185,7 @@ class ClusteredSelection:
     """The next shooters when patches cluster, in `levels` (finest first, each nested in the next):
     each patch shoots with the coarsest of its clusters that is weak — two members or more, power
     under CLUSTER_POWER × the emitted light / the coarsest level's cluster count (× tolerance /
-    CLUSTER_TOLERANCE below draft's tolerance) — or alone when none is; the strongest of these
+    CLUSTER_TOLERANCE below that tolerance) — or alone when none is; the strongest of these
     candidates shoot. A strong coarse cluster thus splits into finer ones before it splits into
     patches."""
 
