@@ -126,6 +126,13 @@ def test_each_round_probes_only_the_patches_it_made_and_the_probe_is_the_ray_cas
     # exact but in the penumbra, where each of the emitter's 8 x 8 pieces is seen or not as a whole
     assert np.abs(measured - exact).max() < 0.04 * exact.max()
     assert np.sqrt(((measured - exact) ** 2).mean()) < 0.005 * exact.max()
+    # draft's and good's probe (`probe_pieces` 4): 4 x 4 pieces, a coarser penumbra, exact outside it
+    coarse_shooters = probe_shooters(scene, patches, effects, 4)
+    assert len(coarse_shooters) == 16 and len(shooters) == 64
+    coarse = probe_light(gpu, scene, patches, floor_rows, coarse_shooters, settings, effects, 4).reshape(-1, 3)[:, 0]
+    umbra_or_lit = (exact == 0) | (exact > 0.999 * occluded_emitter_light(points, emitter, 10.0, low, low))
+    np.testing.assert_allclose(coarse[umbra_or_lit], exact[umbra_or_lit], rtol=2e-3, atol=1e-4 * exact.max())
+    assert np.abs(coarse - exact).max() < 0.04 * exact.max()
 
     split = np.zeros(len(patches), dtype=bool)
     split[floor_rows[:3]] = True

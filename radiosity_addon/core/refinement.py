@@ -27,7 +27,7 @@ from .uvspace import patch_material_values
 
 REFINE_FLOOR = 0.05
 PROBE_ELEMENTS = 4  # elements per patch side the direct light is measured on
-PROBE_EMITTER_PIECES = 64  # the emitters' pieces in the probe (the solve's 256: its penumbrae need not be as fine)
+PROBE_PIECES = 8  # the probe's emitters and area lamps in up to N x N pieces (the solve's emitters in 256 in all)
 GAP_RESOLUTION = 2.0  # patches facing another surface closely are split down to this many gaps
 SMALLEST_PATCH = 1 / 1024  # of the scene's diameter: no split below it
 REFINE_MIN_PATCHES = 2000  # the spread rule may add this many patches whatever the scene's size
@@ -151,10 +151,10 @@ def within_budget(patches: Patches, priority: np.ndarray, budget: int | None) ->
     return split
 
 
-def probe_shooters(scene, patches: Patches, effects) -> list:
-    """The direct light's shots the probe takes: lamps, the sun, and the emitters in about
-    PROBE_EMITTER_PIECES pieces."""
-    return lamps_as_shooters(scene) + emitter_pieces(scene, patches, effects.occlusion, PROBE_EMITTER_PIECES)
+def probe_shooters(scene, patches: Patches, effects, pieces: int = PROBE_PIECES) -> list:
+    """The direct light's shots the probe takes: lamps (an area lamp in up to `pieces` x `pieces`),
+    the sun, and the emitters in about `pieces`² pieces a side."""
+    return lamps_as_shooters(scene, pieces) + emitter_pieces(scene, patches, effects.occlusion, pieces * pieces)
 
 
 def probe_light(gpu, scene, patches: Patches, rows: np.ndarray, shooters: list, settings, effects,
@@ -207,7 +207,7 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
     light = shooters = None
     for level in range(settings.refinements):
         with timer.stage("refine"):
-            now_shooting = probe_shooters(scene, patches, effects)
+            now_shooting = probe_shooters(scene, patches, effects, settings.probe_pieces)
             if light is None or not same_shots(shooters, now_shooting):
                 light = probe_light(gpu, scene, patches, np.arange(len(patches)), now_shooting, settings, effects,
                                     elements)

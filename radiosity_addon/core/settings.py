@@ -16,16 +16,19 @@ KERNELS = ("exact", "disk")
 SHOOTING_POINTS = ("centroid", "centre")
 QUALITIES = ("draft", "good", "final")
 # what each quality sets (the dataclass defaults below are "final"'s); the bench measures what each
-# costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft 10.8 % in 20 s,
-# good 9.0 % in 25 s, final 4.4 % in 290 s; on the Cornell box 10.9 %, 7.0 % and 4.5 %). Tolerances per method: progressive, the
-# unshot power left relative to the emitted; hemi-cube, the change per sweep relative to max B.
+# costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft ~11 % in ~20 s,
+# good ~9 % in ~23 s, final 4.4 % in 290 s; on the Cornell box 10.9 %, 7.0 % and 4.5 %).
+# Tolerances per method: progressive, the unshot power left relative to the emitted; hemi-cube,
+# the change per sweep relative to max B.
 QUALITY_PRESETS = {
     "draft": {"solve": {"patch_size": 1.0, "elements": 1, "refinements": 4, "visibility_res": 256,
-                        "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 8.0, "refine_budget": 0.5},
+                        "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 8.0, "refine_budget": 0.5,
+                        "probe_pieces": 4},
               "tolerance": {"progressive": 5e-2, "hemicube": 1e-3},
               "lightmaps": {"direct_map_resolution": 256, "direct_pieces": 2}},
     "good": {"solve": {"patch_size": 1.0, "elements": 1, "refinements": 5, "visibility_res": 256,
-                       "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 8.0, "refine_budget": 0.5},
+                       "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 8.0, "refine_budget": 0.5,
+                       "probe_pieces": 4},
              "tolerance": {"progressive": 2e-2, "hemicube": 1e-5},
              "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 4}},
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
@@ -70,6 +73,7 @@ class SolveSettings:
     refine_threshold: float = 0.5  # split a patch whose light spreads more than this fraction of its mean
     emitter_gap_resolution: float = 4.0  # split patches across a narrow gap from an emitter down to this many gaps
     refine_budget: float = 1.0  # the spread rule's splits add at most this many times the patches there were
+    probe_pieces: int = 8  # refinement's probe: emitters and area lamps in up to N x N pieces
 
     @classmethod
     def preset(cls, quality: str = "good", **given) -> "SolveSettings":
@@ -115,6 +119,8 @@ class SolveSettings:
             raise SolveError("refinements must lie between 0 and 8, the refine threshold above 0")
         if not self.refine_budget >= 0:
             raise SolveError("the refine budget must not be negative")
+        if not 1 <= self.probe_pieces <= 16:
+            raise SolveError(f"probe pieces per side must be 1..16, got {self.probe_pieces}")
         if not self.emitter_gap_resolution >= 1:
             raise SolveError("the emitter gap resolution must be at least 1 (patches split down to that many gaps)")
 
