@@ -46,9 +46,12 @@ def watch_status_text() -> None:
 def invoke_bake() -> set:
     """As the Bake button does: in the Properties editor, allowed to push an undo step. Every case
     watches a progressive bake (its live preview, its progress, Esc mid-way); auto would pick the
-    hemi-cube method for the Cornell sample (no preview, done in seconds). Set at each bake: an
-    undo takes the file back to before any setting made from Python."""
+    hemi-cube method for the Cornell sample (no preview, done in seconds), and `good`'s progressive
+    bake is over in a few seconds, most of them the solver's start-up: `final` gives a bake of
+    about half a minute to watch. Set at each bake: an undo takes the file back to before any
+    setting made from Python."""
     bpy.context.scene.radiosity.method = "progressive"
+    bpy.context.scene.radiosity.quality = "final"
     with rig.override("PROPERTIES"):
         return bpy.ops.radiosity.bake("INVOKE_DEFAULT", True)
 
