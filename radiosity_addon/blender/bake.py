@@ -103,24 +103,25 @@ def baked_materials(context, exported, baked, options: BakeOptions):
     names = list(set(exported.face_materials))  # each face's material as an index into `names`
     face_material = np.frompyfunc({name: k for k, name in enumerate(names)}.__getitem__, 1, 1)(
         exported.face_materials).astype(np.int64)
+    object_of = {name: k for k, name in enumerate(scene.object_names)}
     try:
         uniform = uniform_materials(names)
         face_uniform = np.isin(face_material, [k for k, name in enumerate(names) if name in uniform])
         object_mapped = np.zeros(len(scene.object_names), dtype=bool)
         np.logical_or.at(object_mapped, scene.object_index, ~face_uniform)
-        mapped = [obj for obj in baked if object_mapped[scene.object_names.index(obj.name)]]
+        mapped = [obj for obj in baked if object_mapped[object_of[obj.name]]]
         probed = face_uniform & ~object_mapped[scene.object_index]
-        probed_names = [names[k] for k in np.unique(face_material[probed])]
-        values = uniform_material_values([uniform[name] for name in probed_names])
+        probed_codes = np.unique(face_material[probed])
+        values = uniform_material_values([uniform[names[k]] for k in probed_codes])
         sizes = core.lightmap_sizes(scene, options.lightmaps, [obj.name for obj in mapped]) if mapped else {}
         maps = bake_material_maps(context, mapped, sizes)
         factors = principled_diffuse_factors(baked) if options.lightmaps.content == "light" else {}
     except RuntimeError as error:  # Cycles refused (a message of its own)
         raise BakeError(f"Cycles could not bake the materials: {str(error).strip().splitlines()[-1]}") from None
     reflectance, emission = scene.reflectance.copy(), scene.emission.copy()
-    for name in probed_names:
-        albedo, emitted = values[name]
-        faces = probed & (face_material == names.index(name))
+    for k in probed_codes:
+        albedo, emitted = values[names[k]]
+        faces = probed & (face_material == k)
         reflectance[faces] = np.clip(albedo, 0.0, core.MAX_REFLECTANCE)
         emission[faces] = np.maximum(emitted, 0.0)
     scene = dataclasses.replace(scene, reflectance=reflectance, emission=emission, material_maps=maps)

@@ -10,9 +10,9 @@ A material that is the same everywhere (`is_uniform`: no texture, attribute or o
 input) needs no map: Cycles bakes it once on a 2 x 2 probe plane (`uniform_material_values`), and
 an object made only of such materials gets no map at all — its faces take the probed values, and
 the bake costs nothing per texel. The rest: Cycles bakes into the active image node of each
-material, so objects that share a material are baked in separate calls (the fewest that keep every call's materials apart), objects without a
-material get Blender's default one for the bake, and everything the bake adds is removed again:
-the file is left as it was.
+material, so objects that share a material are baked in separate calls (the fewest that keep
+every call's materials apart), objects without a material get Blender's default one for the
+bake, and everything the bake adds is removed again: the file is left as it was.
 """
 
 from __future__ import annotations

@@ -213,37 +213,41 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     return lightmaps
 
 
+def covered_texels(rasters: dict) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """The texels every lightmap of `rasters` covers, in one list: their points (N, 3), owner
+    patches (N,), and how many belong to each lightmap, in order."""
+    covered = [entry[3][2] for entry in rasters.values()]
+    points = np.concatenate([entry[3][0][mask] for entry, mask in zip(rasters.values(), covered)])
+    owners = np.concatenate([entry[3][1][mask] for entry, mask in zip(rasters.values(), covered)])
+    return points, owners, [int(mask.sum()) for mask in covered]
+
+
 def clear_contacts(scene: Scene, patches, rasters: dict, holds_b: np.ndarray | None) -> None:
     """Texels under a face touching theirs see nothing (`contact`): their light H becomes 0, and
     B = E where a texel holds the interpolated B (`holds_b` per patch; None: nowhere)."""
-    owners = {name: entry[3][1][entry[3][2]] for name, entry in rasters.items()}
-    points = np.concatenate([entry[3][0][entry[3][2]] for entry in rasters.values()])
-    touched = in_contact(scene, points, patches.surface[np.concatenate(list(owners.values()))])
+    points, owners, counts = covered_texels(rasters)
+    touched = in_contact(scene, points, patches.surface[owners])
+    cleared = np.zeros((len(owners), 3))
+    if holds_b is not None:
+        cleared = np.where(holds_b[owners][:, None], patches.emission[owners], 0.0)
     start = 0
-    for name, (texel_values, _, _, (_, _, covered)) in rasters.items():
-        mine = touched[start:start + len(owners[name])]
-        start += len(owners[name])
-        owner = owners[name][mine]
-        cleared = np.zeros((len(owner), texel_values.shape[-1]))
-        if holds_b is not None:
-            cleared = np.where(holds_b[owner][:, None], patches.emission[owner], 0.0)
+    for (texel_values, _, _, (_, _, covered)), count in zip(rasters.values(), counts):
+        mine = slice(start, start + count)
+        start += count
         values = texel_values[covered]
-        values[mine] = cleared
+        values[touched[mine]] = cleared[mine][touched[mine]]
         texel_values[covered] = values
 
 
 def add_direct_light(gpu: GPU, solution: Solution, rasters: dict, settings: LightmapSettings) -> None:
     """Add every lightmap's direct light texel by texel (one pass over all texels per shot)."""
-    covered = {name: entry[3][2] for name, entry in rasters.items()}
-    points = np.concatenate([entry[3][0][covered[name]] for name, entry in rasters.items()])
-    owners = np.concatenate([entry[3][1][covered[name]] for name, entry in rasters.items()])
+    points, owners, counts = covered_texels(rasters)
     report = solution.report
     light, _ = direct_light(gpu, solution.scene, solution.patches, points, owners, report.settings.visibility,
                             settings.direct_map_resolution, report.effects.occlusion, settings.direct_pieces)
     start = 0
-    for name, (texel_values, _, _, _) in rasters.items():
-        count = int(covered[name].sum())
-        texel_values[covered[name]] = np.maximum(texel_values[covered[name]] + light[start:start + count], 0.0)
+    for (texel_values, _, _, (_, _, covered)), count in zip(rasters.values(), counts):
+        texel_values[covered] = np.maximum(texel_values[covered] + light[start:start + count], 0.0)
         start += count
 
 

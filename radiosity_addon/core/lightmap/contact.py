@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene import Scene
-from ..scene.neighbours import near_pairs
+from ..scene.neighbours import near_pairs, range_chunks
 
 CONTACT_DISTANCE = 1e-4  # planes closer than this (times the scene's diameter) touch
 PARALLEL = 0.999  # -cos between the normals of two faces that touch face to face
@@ -85,13 +85,8 @@ def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray) -> np.nda
     partner_high = np.take_along_axis(high[partner], along[:, None], 1)[:, 0] + tolerance
     start = np.searchsorted(sorted_keys, keys(touched, partner_low), side="left")
     count = np.searchsorted(sorted_keys, keys(touched, partner_high), side="right") - start
-    done = 0
-    while done < len(touched):
-        stop = done + max(1, int(np.searchsorted(np.cumsum(count[done:]), POINT_CHUNK, side="right")))
-        n = count[done:stop]
-        pair = np.repeat(np.arange(done, stop), n)
-        point = order[np.repeat(start[done:stop] - np.concatenate([[0], np.cumsum(n)[:-1]]), n) + np.arange(n.sum())]
+    for pair, at in range_chunks(start, count, POINT_CHUNK):
+        point = order[at]
         hit = inside_polygons(points[point], scene.corners[partner[pair]], scene.normal[partner[pair]], tolerance)
         covered[point[hit]] = True
-        done = stop
     return covered

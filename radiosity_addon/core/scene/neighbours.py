@@ -58,18 +58,21 @@ def _grid_pairs(centre, radius, queries, reach, positions, others):
         k = np.where(valid, _cell_keys(c, span), -1)
         lo = np.searchsorted(sorted_keys, k, side="left")
         hi = np.searchsorted(sorted_keys, k, side="right")
-        counts = np.where(valid, hi - lo, 0)
-        start = 0
-        while start < len(positions):
-            # as many queries as fit PAIR_CHUNK pairs (at least one)
-            cumulative = np.cumsum(counts[start:])
-            stop = start + max(1, int(np.searchsorted(cumulative, PAIR_CHUNK, side="right")))
-            n = counts[start:stop]
-            if n.sum():
-                query = np.repeat(positions[start:stop], n)
-                first = np.repeat(lo[start:stop] - np.concatenate([[0], np.cumsum(n)[:-1]]), n)
-                other = others[order[first + np.arange(n.sum())]]
-                gap = np.linalg.norm(centre[other] - centre[queries[query]], axis=1)
-                close = gap < reach[query] + radius[other]
-                yield query[close], other[close]
-            start = stop
+        for which, at in range_chunks(lo, np.where(valid, hi - lo, 0)):
+            query, other = positions[which], others[order[at]]
+            gap = np.linalg.norm(centre[other] - centre[queries[query]], axis=1)
+            close = gap < reach[query] + radius[other]
+            yield query[close], other[close]
+
+
+def range_chunks(start: np.ndarray, count: np.ndarray, chunk: int = PAIR_CHUNK):
+    """Yield chunks (range index, position) of every position start[r] .. start[r] + count[r] - 1,
+    whole ranges in order, as many as fit `chunk` positions (at least one range a chunk)."""
+    done = 0
+    while done < len(start):
+        stop = done + max(1, int(np.searchsorted(np.cumsum(count[done:]), chunk, side="right")))
+        n = count[done:stop]
+        if n.sum():
+            which = np.repeat(np.arange(done, stop), n)
+            yield which, np.repeat(start[done:stop] - np.concatenate([[0], np.cumsum(n)[:-1]]), n) + np.arange(n.sum())
+        done = stop
