@@ -12,8 +12,8 @@ import pytest
 from test_progressive import cube, cube_face_reference, face_means
 
 from radiosity_addon.core import SolveSettings, load_scene, solve, subdivide
-from radiosity_addon.core.progressive.clusters import (FINEST_MEMBERS, NORMAL_BINS, ClusterShooters, build_clusters,
-                                                      group_rows, octahedral_bins)
+from radiosity_addon.core.progressive.clusters import (FINEST_MEMBERS, NORMAL_BINS, ClusterGrid, ClusterShooters,
+                                                      build_clusters, coarser, grouped, octahedral_bins, packed_keys)
 from radiosity_addon.core.shooting import ElementTextures, PatchBuffers, PatchShooters, ShootingPass, ShotVisibility
 
 
@@ -45,8 +45,8 @@ def test_clusters_hold_every_patch_once_near_each_other_and_facing_alike():
 
 @pytest.mark.parametrize("wide", [False, True])
 def test_rows_group_as_numpy_unique_groups_them(wide):
-    """group_rows is np.unique(axis=0)'s inverse (same groups, same order), also when the packed
-    key would overflow int64 and is renumbered on the way."""
+    """packed_keys + grouped is np.unique(axis=0)'s inverse (same groups, same order), also when
+    the packed key would overflow int64 and is renumbered on the way."""
     rng = np.random.default_rng(5)
     columns = [rng.integers(0, 6, 5000), rng.integers(-4, 3, 5000), rng.integers(0, 3, 5000)]
     if wide:
@@ -54,7 +54,30 @@ def test_rows_group_as_numpy_unique_groups_them(wide):
                     np.full(5000, 2 ** 50)]
         columns[3][:2] = [-2 ** 40, 2 ** 40]  # spans of 2^41 and more: the key must be renumbered
     expected = np.unique(np.stack(columns, axis=1), axis=0, return_inverse=True)[1].ravel()
-    assert np.array_equal(group_rows(columns), expected)
+    bounded = [(c, int(c.min()), int(c.max() - c.min()) + 1) for c in columns]
+    inverse, one_row = grouped(packed_keys(bounded))
+    assert np.array_equal(inverse, expected)
+    assert np.array_equal(inverse[one_row], np.arange(expected.max() + 1))
+
+
+def test_levels_grouped_from_the_finer_level_are_the_levels_grouped_from_the_patches():
+    """build_clusters groups only its finest level from the patches and each coarser one from the
+    finer one's clusters: the same clusters, numbered alike, as grouping the patches' own
+    (cell, normal bin, plane slab, owner) at each level's cell side."""
+    patches = subdivide(load_scene("cornell-box"), 8)
+    owner = patches.surface % 3  # three "objects" interleaved
+    levels = build_clusters(patches, 64, owner=owner)
+    assert len(levels) >= 3
+    grid = ClusterGrid(patches.center, patches.normal, owner)
+    for level in levels:
+        columns = grid.columns(level.cell)
+        rows = np.stack([column for column, _, _ in columns], axis=1)
+        assert np.array_equal(level.of_patch, np.unique(rows, axis=0, return_inverse=True)[1].ravel())
+        assert sorted(level.by_cluster.tolist()) == list(range(len(patches)))  # grouped by cluster
+        assert np.array_equal(level.of_patch[level.by_cluster], np.sort(level.of_patch))
+        doubled = grid.columns(2 * level.cell)
+        for (halved, low, span), (direct, *_) in zip(coarser(columns), doubled):
+            assert np.array_equal(halved, direct) and low <= halved.min() and halved.max() < low + span
 
 
 def test_octahedral_bins_are_about_twenty_degrees_wide():

@@ -57,30 +57,72 @@ def octahedral_bins(normals: np.ndarray, bins: int = NORMAL_BINS) -> np.ndarray:
     return j * bins + i
 
 
-def cluster_keys(centers: np.ndarray, normals: np.ndarray, normal_bin: np.ndarray, owner: np.ndarray,
-                 cell: float) -> np.ndarray:
-    """(P,) cluster index of each patch for grid cells of side `cell` (indices 0 .. C-1): same
-    cell, same normal bin, same `owner` (object), and planes within PLANE_SLAB cells (a box's
-    face and the wall behind it do not cluster)."""
-    cells = np.floor((centers - centers.min(axis=0)) / cell).astype(np.int64)
-    offset = np.floor((normals * centers).sum(axis=1) / (PLANE_SLAB * cell)).astype(np.int64)
-    return group_rows([cells[:, 0], cells[:, 1], cells[:, 2], normal_bin, offset, owner])
+class ClusterGrid:
+    """The patches' place on the clusters' grids, for any cell side: their centres from the
+    grid's origin, their planes' distances, normal bins and owners, and the bounds of each, found
+    once (a grid's keys then cost one pass over the patches, no search for bounds)."""
+
+    def __init__(self, centers: np.ndarray, normals: np.ndarray, owner: np.ndarray):
+        self.local = centers - centers.min(axis=0) if len(centers) else centers
+        self.plane = (normals * centers).sum(axis=1)
+        self.normal_bin = octahedral_bins(normals)
+        self.owner = owner
+        self.extent = self.local.max(axis=0) if len(centers) else np.zeros(3)
+        self.plane_range = (float(self.plane.min(initial=0.0)), float(self.plane.max(initial=0.0)))
+        self.owners = int(owner.max(initial=0)) + 1
+        self.counts: dict[float, int] = {}
+
+    def columns(self, cell: float) -> list[tuple[np.ndarray, int, int]]:
+        """Each patch's (cell x, y, z, normal bin, plane slab, owner) for cells of side `cell`, as
+        (column, lowest value, span) for `packed_keys`."""
+        cells = np.floor(self.local / cell).astype(np.int64)
+        slab = PLANE_SLAB * cell
+        offset = np.floor(self.plane / slab).astype(np.int64)
+        low, high = (int(np.floor(bound / slab)) for bound in self.plane_range)
+        spans = [int(np.floor(e / cell)) + 1 for e in self.extent]
+        return [(cells[:, 0], 0, spans[0]), (cells[:, 1], 0, spans[1]), (cells[:, 2], 0, spans[2]),
+                (self.normal_bin, 0, NORMAL_BINS * NORMAL_BINS), (offset, low, high - low + 1),
+                (self.owner, 0, self.owners)]
+
+    def count(self, cell: float) -> int:
+        """How many clusters cells of side `cell` give (a sort, no inverse; each side once)."""
+        if cell not in self.counts:
+            self.counts[cell] = int(np.unique(packed_keys(self.columns(cell))).size)
+        return self.counts[cell]
 
 
-def group_rows(columns: list) -> np.ndarray:
-    """(P,) index 0 .. G-1 of each row's distinct tuple of integer `columns` (P,) each, in the
-    tuples' lexicographic order: np.unique(axis=0)'s inverse, with the columns packed into one
-    int64 key (mixed radix) and a 1-D sort, renumbered first whenever the key would overflow."""
-    key, bound = np.zeros(len(columns[0]), dtype=np.int64), 1
-    for column in columns:
-        column = np.asarray(column, dtype=np.int64)
-        low = int(column.min(initial=0))
-        span = int(column.max(initial=0)) - low + 1
+def packed_keys(columns: list[tuple[np.ndarray, int, int]]) -> np.ndarray:
+    """(P,) one int64 per row whose order is the lexicographic order of the rows' tuples of
+    integer (column, lowest value, span): mixed radix, renumbered first whenever the key would
+    overflow."""
+    key, bound = np.zeros(len(columns[0][0]), dtype=np.int64), 1
+    for column, low, span in columns:
         if bound * span >= 2 ** 62:
             key = np.unique(key, return_inverse=True)[1].ravel()
             bound = int(key.max(initial=0)) + 1
-        key, bound = key * span + (column - low), bound * span
-    return np.unique(key, return_inverse=True)[1].ravel()
+        key, bound = key * span + (np.asarray(column, dtype=np.int64) - low), bound * span
+    return key
+
+
+def coarser(columns: list[tuple[np.ndarray, int, int]]) -> list[tuple[np.ndarray, int, int]]:
+    """The columns for cells twice as wide: floor(floor(x) / 2) = floor(x / 2), and a cell side
+    halved or doubled is exact in floating point, so these are the columns `ClusterGrid.columns`
+    gives for the doubled side, bit for bit."""
+    result = [(column // 2, low // 2, (low + span - 1) // 2 - low // 2 + 1)
+              for column, low, span in columns[:3]]
+    result.append(columns[3])
+    column, low, span = columns[4]
+    result.append((column // 2, low // 2, (low + span - 1) // 2 - low // 2 + 1))
+    result.append(columns[5])
+    return result
+
+
+def grouped(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(index 0 .. G-1 of each row's key in the keys' order, one row of each group)."""
+    inverse = np.unique(key, return_inverse=True)[1].ravel()
+    one_row = np.empty(int(inverse.max(initial=-1)) + 1, dtype=np.int64)
+    one_row[inverse] = np.arange(len(key))
+    return inverse, one_row
 
 
 @dataclass
@@ -107,31 +149,54 @@ def build_clusters(patches: Patches, target: int, owner: np.ndarray | None = Non
     """Nested levels of clusters, finest first; the coarsest has about `target` clusters at most
     (fewer when the patches are fewer), each finer one cells half as wide, the finest the first
     whose clusters hold FINEST_MEMBERS patches or fewer on average (or the `max_levels`th).
-    O(P log P) per level.
     Patches of different `owner`s (P,) (their objects: a book and the shelf it stands in) never
-    cluster."""
-    centers = patches.center
-    normal_bin = octahedral_bins(patches.normal)
+    cluster.
+    About ten sorts of the patches whatever the number of levels: the coarsest cell and the
+    finest level by bisection over counts, then the finest level grouped and each coarser
+    one grouped from the finer one's clusters (its cells nest in theirs), not from the patches."""
     owner = np.zeros(len(patches), dtype=np.int64) if owner is None else np.asarray(owner, dtype=np.int64)
-    extent = float(np.max(centers.max(axis=0) - centers.min(axis=0))) if len(patches) else 0.0
+    grid = ClusterGrid(patches.center, patches.normal, owner)
+    extent = float(np.max(grid.extent)) if len(patches) else 0.0
     smallest = max(extent, 1e-6) / 64
     last = int(np.ceil(np.log(256) / np.log(CELL_GROWTH)))  # smallest × CELL_GROWTH^last ≥ 4 × extent
-    count = lambda k: int(cluster_keys(centers, patches.normal, normal_bin, owner,  # noqa: E731
-                                       smallest * CELL_GROWTH ** k).max(initial=-1)) + 1
     low, high = 0, last  # bisection: the counts fall as the cells grow (a few sorts, not one per size)
     while low < high:
         middle = (low + high) // 2
-        low, high = (low, middle) if count(middle) <= target else (middle + 1, high)
+        low, high = (low, middle) if grid.count(smallest * CELL_GROWTH ** middle) <= target else (middle + 1, high)
     cell = smallest * CELL_GROWTH ** low
+    # the finest level: the first, coarse to fine, whose clusters hold FINEST_MEMBERS or fewer on
+    # average (counts grow as cells shrink: bisection again)
+    fine = lambda k: len(patches) <= FINEST_MEMBERS * grid.count(cell / 2 ** k)  # noqa: E731
+    low, high = 1, max_levels - 1
+    if max_levels == 1 or fine(0):
+        low = high = 0
+    while low < high:
+        middle = (low + high) // 2
+        low, high = (low, middle) if fine(middle) else (middle + 1, high)
+    columns = grid.columns(cell / 2 ** low)
+    of_patch, one_row = grouped(packed_keys(columns))
+    by_cluster = np.argsort(of_patch, kind="stable")
     result = []
-    while len(result) < max_levels and (not result or result[0].members.mean() > FINEST_MEMBERS):
-        size = cell / 2 ** len(result)  # the same origin: a cell's halves nest in it, as do the slabs
-        of_patch = cluster_keys(centers, patches.normal, normal_bin, owner, size)
-        members = np.bincount(of_patch)
-        result.insert(0, PatchClusters(of_patch=of_patch, members=members,
-                                       by_cluster=np.argsort(of_patch, kind="stable"),
-                                       starts=np.concatenate([[0], np.cumsum(members)]), cell=size))
+    for k in range(low, -1, -1):  # finest first; cells of side cell / 2^k
+        members = np.bincount(of_patch, minlength=len(one_row))
+        result.append(PatchClusters(of_patch=of_patch, members=members, by_cluster=by_cluster,
+                                    starts=np.concatenate([[0], np.cumsum(members)]), cell=cell / 2 ** k))
+        if k:  # the next coarser level from one row of each of this level's clusters
+            columns = coarser([(column[one_row], lowest, span) for column, lowest, span in columns])
+            parent, one_row = grouped(packed_keys(columns))
+            of_patch = parent[of_patch]
+            by_cluster = regrouped(result[-1], parent)
     return result
+
+
+def regrouped(finer: "PatchClusters", parent: np.ndarray) -> np.ndarray:
+    """The patches grouped by coarser cluster, from `finer`'s grouping and each finer cluster's
+    `parent`: the finer clusters' runs taken parent by parent (a sort of the clusters, not of the
+    patches), so within a coarser cluster patches come finer cluster by finer cluster."""
+    order = np.argsort(parent, kind="stable")
+    counts = finer.members[order]
+    run_start = np.repeat(finer.starts[order] - (np.cumsum(counts) - counts), counts)
+    return finer.by_cluster[run_start + np.arange(len(finer.by_cluster))]
 
 
 def spread_rectangle(center: np.ndarray, x: np.ndarray, y: np.ndarray, points: np.ndarray, area: np.ndarray,

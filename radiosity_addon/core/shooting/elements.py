@@ -146,16 +146,21 @@ class ElementTextures:
         else:  # S = 1: level 0 already holds one texel per patch (no mip levels: keep it complete)
             self.residual.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
 
-    def read_padded_light(self) -> np.ndarray:
-        """(P, S+2g, S+2g, 3) float64: the padded light tiles."""
+    def _padded_tiles(self) -> np.ndarray:
+        """(P, S+2g, S+2g, C) float32 view of the light texture's tiles."""
         w, h = self.layout.light_size
         image = np.frombuffer(self.light.read(), dtype=np.float32).reshape(h, w, self.light.components)
-        return self._rgb(self.layout.tiles(image, padded=True)).astype(np.float64)
+        return self.layout.tiles(image, padded=True)
+
+    def read_padded_light(self) -> np.ndarray:
+        """(P, S+2g, S+2g, 3) float64: the padded light tiles."""
+        return self._rgb(self._padded_tiles()).astype(np.float64)
 
     def read_light(self) -> np.ndarray:
-        """(P, S, S, 3) float64 light H gathered by each element."""
+        """(P, S, S, 3) float64 light H gathered by each element (the gutters cut off before the
+        copy: with one element per patch they are 8 of every 9 texels read)."""
         g, s = self.layout.gutter, self.layout.elements
-        return self.read_padded_light()[:, g:g + s, g:g + s]
+        return self._rgb(self._padded_tiles()[:, g:g + s, g:g + s]).astype(np.float64)
 
     def radiosity(self, light: np.ndarray) -> np.ndarray:
         """(P, S, S, 3) element radiosity B = E + ρH of element light `light`."""
