@@ -25,16 +25,16 @@ QUALITY_PRESETS = {
                         "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 8.0, "refine_budget": 0.5,
                         "probe_pieces": 4},
               "tolerance": {"progressive": 5e-2, "hemicube": 1e-3},
-              "lightmaps": {"direct_map_resolution": 256, "direct_pieces": 2}},
+              "lightmaps": {"direct_map_resolution": 256, "direct_pieces": 2, "direct_subsamples": 2}},
     "good": {"solve": {"patch_size": 1.0, "elements": 1, "refinements": 5, "visibility_res": 256,
-                       "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 8.0, "refine_budget": 0.5,
+                       "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 0.5,
                        "probe_pieces": 4},
              "tolerance": {"progressive": 2e-2, "hemicube": 1e-5},
-             "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 4}},
+             "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 4, "direct_subsamples": 3}},
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
                         "hemicube_res": 128, "hemicube_elements": 2, "emitter_gap_resolution": 4.0, "refine_budget": 1.0},
               "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
-              "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 8}},
+              "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 8, "direct_subsamples": 4}},
 }
 DEFAULT_TOLERANCE = QUALITY_PRESETS["final"]["tolerance"]
 
@@ -139,6 +139,7 @@ class LightmapSettings:
     direct_per_texel: bool = True  # lamps' and emitters' light recomputed at every texel (sharp shadows)
     direct_map_resolution: int = 1024  # pixels across the visibility maps of that direct light
     direct_pieces: int = 8  # emissive polygons and area lamps shoot that light in up to N x N pieces (penumbrae)
+    direct_subsamples: int = 4  # where that light is sharp, a texel takes the mean of N x N points over its square (1: its centre)
 
     @classmethod
     def preset(cls, quality: str = "good", **given) -> "LightmapSettings":
@@ -156,3 +157,5 @@ class LightmapSettings:
             raise SolveError(f"the lightmap size cap must be at least {MIN_LIGHTMAP_SIZE}, got {self.max_size}")
         if not 1 <= self.direct_pieces <= 16:
             raise SolveError(f"direct light pieces per side must be 1..16, got {self.direct_pieces}")
+        if not 1 <= self.direct_subsamples <= 8:
+            raise SolveError(f"direct light points per texel side must be 1..8, got {self.direct_subsamples}")

@@ -30,7 +30,7 @@ from ..solution import Solution
 from ..uvspace import rasterize
 from . import charts
 from .contact import in_contact
-from .direct import direct_light, texel_points
+from .direct import direct_light, footprint_points, sharp_texels, texel_axes, texel_points
 from .lattice import continuous_lattice, element_values
 from .mips import filled_image, mip_levels
 from .size import resolve_size
@@ -179,6 +179,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
                                         patches.normal[baked], world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
     rasters = {}
+    axes = np.zeros((len(patches), 3, 2))  # each patch's world step per texel, in its object's lightmap
     with open_gpu(gpu) as lightmap_gpu:
         for name, indices in objects.items():
             size = layouts.sizes[name]
@@ -189,9 +190,10 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
                 raise SolveError(f"object '{name}': its faces cover no texel of a {size[0]}x{size[1]}"
                                  " lightmap; raise the texel density or its resolution")
             points = texel_points(lightmap_gpu, patches, mine, corners_texels, size)
+            axes[mine] = texel_axes(patches, mine, corners_texels)
             rasters[name] = (texel_values.astype(np.float64), signed_ids, mine, points)
         if per_texel:
-            add_direct_light(lightmap_gpu, solution, rasters, settings)
+            add_direct_light(lightmap_gpu, solution, rasters, settings, axes)
         clear_contacts(scene, patches, rasters, holds_b=~mapped if not (per_texel or light) else None)
     lightmaps = {}
     for name, (texel_values, signed_ids, mine, points) in rasters.items():
@@ -239,12 +241,34 @@ def clear_contacts(scene: Scene, patches, rasters: dict, holds_b: np.ndarray | N
         texel_values[covered] = values
 
 
-def add_direct_light(gpu: GPU, solution: Solution, rasters: dict, settings: LightmapSettings) -> None:
-    """Add every lightmap's direct light texel by texel (one pass over all texels per shot)."""
+def add_direct_light(gpu: GPU, solution: Solution, rasters: dict, settings: LightmapSettings,
+                     axes: np.ndarray) -> None:
+    """Add every lightmap's direct light texel by texel (one pass over all texels per shot), the
+    mean over the texel's square where it is sharp (a second pass over those texels' points;
+    `axes` (P, 3, 2): each patch's world step per texel)."""
     points, owners, counts = covered_texels(rasters)
     report = solution.report
-    light, _ = direct_light(gpu, solution.scene, solution.patches, points, owners, report.settings.visibility,
-                            settings.direct_map_resolution, report.effects.occlusion, settings.direct_pieces)
+    shoot = lambda at, on: direct_light(  # noqa: E731
+        gpu, solution.scene, solution.patches, at, on, report.settings.visibility, settings.direct_map_resolution,
+        report.effects.occlusion, settings.direct_pieces)[0]
+    light = shoot(points, owners)
+    masks = [entry[3][2] for entry in rasters.values()]
+    images, faces, start = [], [], 0
+    for mask, count in zip(masks, counts):
+        image, face = np.zeros(mask.shape), np.full(mask.shape, -1, dtype=np.int64)
+        image[mask] = light[start:start + count].sum(axis=1)
+        face[mask] = solution.patches.surface[owners[start:start + count]]
+        images.append(image)
+        faces.append(face)
+        start += count
+    sharp = np.flatnonzero(np.concatenate([flags[mask] for flags, mask in zip(sharp_texels(images, faces), masks)]))
+    if len(sharp) and settings.direct_subsamples > 1:
+        at, texel = footprint_points(solution.scene, solution.patches, points[sharp], owners[sharp],
+                                     axes[owners[sharp]], settings.direct_subsamples)
+        spread = shoot(at, owners[sharp][texel])
+        taken = np.bincount(texel, minlength=len(sharp))
+        light[sharp] = np.stack([np.bincount(texel, weights=spread[:, c], minlength=len(sharp))
+                                 for c in range(3)], axis=1) / taken[:, None]
     start = 0
     for (texel_values, _, _, (_, _, covered)), count in zip(rasters.values(), counts):
         texel_values[covered] = np.maximum(texel_values[covered] + light[start:start + count], 0.0)

@@ -5,6 +5,14 @@ as sharp as the lightmap can show; the smooth rest of the light comes from the s
 A texel's point is the world point its centre shows on the patch whose UV footprint holds it (a
 texel a footprint only grazes: the footprint's nearest point), so every sample lies on a
 surface and takes that surface's plane for the visibility lookup.
+
+A texel is the mean over its square, not its centre: Cycles bakes a texel by jittering each
+sample across it (a one-texel box), kept inside the face the centre lies on. Where the direct
+light bends sharply across a texel (a shadow's or a light's edge: `sharp_texels`), the texel's
+light is the mean of N x N points spread over its square inside its face (`footprint_points`;
+N is `LightmapSettings.direct_subsamples`); elsewhere the light is smooth enough that the centre is that mean to
+within SHARP_CONTRAST / 24 (half a per cent). Measured on the Cornell box: the ceiling around the lamp (whose back lights it from
+5 mm, a third of a texel) was 99 % of the whole bake's squared error at texel centres.
 """
 
 from __future__ import annotations
@@ -29,6 +37,67 @@ def texel_points(gpu: GPU, patches: Patches, rows: np.ndarray, corners_texels: n
     covered = signed_ids != 0
     owner = np.where(covered, rows[np.abs(signed_ids) - 1], -1)
     return positions.astype(np.float64), owner, covered
+
+
+SHARP_CONTRAST = 0.12  # second difference over the brightest of three texels above which the middle one is sharp
+
+
+def texel_axes(patches: Patches, rows: np.ndarray, corners_texels: np.ndarray) -> np.ndarray:
+    """(n, 3, 2): the world step of one texel along x and along y on each patch of `rows`, from
+    its first three corners (its UV map is affine on them); zeros where the UVs are degenerate."""
+    world = patches.corners[rows]
+    uv = np.asarray(corners_texels, dtype=np.float64)
+    edges_uv = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], axis=2)  # (n, 2, 2): columns
+    edges_world = np.stack([world[:, 1] - world[:, 0], world[:, 2] - world[:, 0]], axis=2)  # (n, 3, 2)
+    det = edges_uv[:, 0, 0] * edges_uv[:, 1, 1] - edges_uv[:, 0, 1] * edges_uv[:, 1, 0]
+    usable = np.abs(det) > 1e-12
+    inverse = np.zeros_like(edges_uv)
+    safe = np.where(usable, det, 1.0)
+    inverse[:, 0, 0], inverse[:, 1, 1] = edges_uv[:, 1, 1] / safe, edges_uv[:, 0, 0] / safe
+    inverse[:, 0, 1], inverse[:, 1, 0] = -edges_uv[:, 0, 1] / safe, -edges_uv[:, 1, 0] / safe
+    return np.where(usable[:, None, None], edges_world @ inverse, 0.0)
+
+
+def sharp_texels(images: list[np.ndarray], faces: list[np.ndarray]) -> list[np.ndarray]:
+    """Per lightmap, the texels (H, W) whose centre's value (H, W) may stray from their square's
+    mean: the second difference across a texel is 24 times that stray (a linear change averages
+    out), so a texel is sharp where, along x or y between two neighbours on its own face (`faces`
+    (H, W): the surface each texel shows, -1 none; another face's texel is another chart's or
+    across an edge), it exceeds SHARP_CONTRAST of the largest of the three."""
+    result = []
+    for image, face in zip(images, faces):
+        sharp = np.zeros(face.shape, dtype=bool)
+        for axis in (0, 1):
+            a, f = np.moveaxis(image, axis, 0), np.moveaxis(face, axis, 0)
+            same = (f[1:-1] >= 0) & (f[2:] == f[1:-1]) & (f[:-2] == f[1:-1])
+            bend = np.abs(a[2:] - 2 * a[1:-1] + a[:-2])
+            flags = np.moveaxis(sharp, axis, 0)
+            flags[1:-1] |= same & (bend > SHARP_CONTRAST * np.maximum(np.maximum(a[2:], a[1:-1]), a[:-2]))
+        result.append(sharp)
+    return result
+
+
+def footprint_points(scene: Scene, patches: Patches, centres: np.ndarray, owners: np.ndarray,
+                     axes: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """(points (M, 3), index of their texel (M,)): `count` x `count` points spread evenly over each
+    texel's square (its centre `centres` (N, 3), its patch's texel `axes` (N, 3, 2)) and inside
+    the face its patch `owners` (N,) lies on; a texel none of whose points is inside keeps its
+    centre."""
+    offsets = (np.arange(count) + 0.5) / count - 0.5
+    dx, dy = (grid.ravel() for grid in np.meshgrid(offsets, offsets))
+    # the face's edges as inward half-planes, tested in texel steps: side(centre + a x + b y) =
+    # side(centre) + a side(x) + b side(y), per texel (N, 4) instead of per point
+    corners = scene.corners[patches.surface[owners]]  # (N, 4, 3), triangles repeat their last corner
+    inward = np.cross(patches.normal[owners][:, None, :], np.roll(corners, -1, axis=1) - corners)  # (N, 4, 3)
+    reach = np.linalg.norm(inward, axis=2)
+    at_centre = np.einsum("nkj,nkj->nk", inward, centres[:, None, :] - corners) + 1e-9 * reach * (reach + 1.0)
+    along = np.einsum("nkj,njc->nkc", inward, axes)  # (N, 4, 2)
+    side = at_centre[:, None, :] + along[:, None, :, 0] * dx[None, :, None] + along[:, None, :, 1] * dy[None, :, None]
+    inside = np.all(side >= 0.0, axis=2)  # (N, count²)
+    texel, sample = np.nonzero(inside)
+    points = centres[texel] + axes[texel, :, 0] * dx[sample, None] + axes[texel, :, 1] * dy[sample, None]
+    lone = np.flatnonzero(~inside.any(axis=1))  # slivers thinner than the points' spacing
+    return np.concatenate([points, centres[lone]]), np.concatenate([texel, lone])
 
 
 def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray,
