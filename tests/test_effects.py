@@ -128,3 +128,32 @@ def test_progressive_channel_skip_matches_full(gpu):
     assert analysed.report.work.texel_bytes * 4 == full.report.work.texel_bytes
     assert analysed.report.details.shots == full.report.details.shots
     np.testing.assert_allclose(analysed.element_radiosity, full.element_radiosity, rtol=1e-5, atol=1e-9)
+
+
+def test_the_analysis_memory_stays_flat_as_the_scene_grows():
+    """The pairwise plane tests run in chunks whose arrays are bounded, not 256 rows against
+    every corner: on a floor of 12 000 reflective squares under a ceiling the analysis peaks at
+    33 MB of Python-traced memory, held under 80 (the 256-row chunks took 195 MB here, 1 GB on
+    the 64k-triangle room), and still finds the interreflection and the occlusion."""
+    import tracemalloc
+
+    side = 110
+    step = 1.0 / side
+    x, y = np.meshgrid(np.arange(side) * step, np.arange(side) * step)
+    squares = np.stack([np.stack([x, y, np.zeros_like(x)], -1), np.stack([x + step, y, np.zeros_like(x)], -1),
+                        np.stack([x + step, y + step, np.zeros_like(x)], -1),
+                        np.stack([x, y + step, np.zeros_like(x)], -1)], axis=2).reshape(-1, 4, 3)
+    surfaces = [surface(f"tile {k}", corners.tolist(), 0.5, 0.0) for k, corners in enumerate(squares)]
+    ceiling = [[0, 0, 1], [0, 1, 1], [1, 1, 1], [1, 0, 1]]  # facing down
+    surfaces += [surface("ceiling", ceiling, 0.5, 1.0),
+                 surface("block", [[0.4, 0.4, 0.5], [0.4, 0.6, 0.5], [0.6, 0.6, 0.5], [0.6, 0.4, 0.5]], 0.5, 0.0)]
+    scene = scene_from_dict({"surfaces": surfaces})
+    assert len(scene) > 12_000
+    tracemalloc.start()
+    try:
+        effects = analyse(scene)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert effects.interreflection and effects.occlusion
+    assert peak < 80 * 2 ** 20, f"{peak / 2 ** 20:.0f} MB"

@@ -34,6 +34,7 @@ from .topology import components
 
 PLANE_TOLERANCE = 1e-6  # relative to the scene diameter
 ROWS_PER_CHUNK = 256
+CHUNK_TESTS = 2_000_000  # vertex-plane tests per chunk at most (a chunk's arrays stay near 16 MB each)
 PAIR_BUDGET = 50_000_000  # vertex-plane tests before the analysis gives up and simulates
 
 
@@ -60,9 +61,13 @@ def _plane_heights(scene: Scene, planes: slice, points: np.ndarray) -> np.ndarra
     return heights.T.reshape((len(normals),) + points.shape[:-1])
 
 
-def _chunks(count: int):
-    for start in range(0, count, ROWS_PER_CHUNK):
-        yield slice(start, min(start + ROWS_PER_CHUNK, count))
+def _chunks(count: int, width: int):
+    """Slices of up to ROWS_PER_CHUNK rows, fewer where each row tests `width` points, so that a
+    chunk's arrays have at most CHUNK_TESTS entries whatever the scene's size (at 64k triangles
+    256 rows against every corner took 0.7-1 GB)."""
+    rows = int(min(ROWS_PER_CHUNK, max(1, CHUNK_TESTS // max(width, 1))))
+    for start in range(0, count, rows):
+        yield slice(start, min(start + rows, count))
 
 
 def is_grey(scene: Scene) -> bool:
@@ -77,7 +82,7 @@ def _inside_every_front(scene: Scene, points: np.ndarray) -> bool:
     if len(points) == 0:
         return True
     tolerance = PLANE_TOLERANCE * scene.diameter
-    return all(np.all(_plane_heights(scene, rows, points) >= -tolerance) for rows in _chunks(len(scene)))
+    return all(np.all(_plane_heights(scene, rows, points) >= -tolerance) for rows in _chunks(len(scene), len(points)))
 
 
 def can_occlude(scene: Scene) -> bool:
@@ -87,7 +92,7 @@ def can_occlude(scene: Scene) -> bool:
     tolerance = PLANE_TOLERANCE * scene.diameter
     if len(scene) ** 2 * 4 > PAIR_BUDGET:
         return True  # too big to prove convex within the budget: simulate occlusion
-    if any(np.any(_plane_heights(scene, rows, scene.corners) < -tolerance) for rows in _chunks(len(scene))):
+    if any(np.any(_plane_heights(scene, rows, scene.corners) < -tolerance) for rows in _chunks(len(scene), 4 * len(scene))):
         return True
     lamps = scene.lamps
     if any(lamp.type == "sun" for lamp in lamps):
@@ -105,7 +110,7 @@ def can_interreflect(scene: Scene) -> bool:
     tolerance = PLANE_TOLERANCE * scene.diameter
     corners = scene.corners[reflective]
     budget = PAIR_BUDGET
-    for rows in _chunks(len(reflective)):
+    for rows in _chunks(len(reflective), 4 * len(reflective)):
         if budget <= 0:
             return True  # undecided within the budget: simulate interreflection
         chosen = reflective[rows]
@@ -145,7 +150,7 @@ def _something_behind(scene: Scene, candidates: np.ndarray) -> np.ndarray:
         low, high = scene.bounds
         points = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1]) for z in (low[2], high[2])])
     behind = np.zeros(len(candidates), dtype=bool)
-    for rows in _chunks(len(candidates)):
+    for rows in _chunks(len(candidates), len(points)):
         behind[rows] = np.any(_plane_heights(scene, candidates[rows], points) < -tolerance, axis=1)
     return behind
 
@@ -165,7 +170,7 @@ def _emitters_inside(scene: Scene, parts) -> np.ndarray:
     lit = np.zeros(parts.count, dtype=bool)
     if len(points) == 0:
         return lit
-    for rows in _chunks(parts.count):
+    for rows in _chunks(parts.count, 3 * len(points)):
         ids = np.arange(rows.start, rows.stop)
         inside = np.all((points[None] >= parts.low[rows, None]) & (points[None] <= parts.high[rows, None]), axis=2)
         lit[rows] = np.any(inside & (owners[None] != ids[:, None]), axis=1)
