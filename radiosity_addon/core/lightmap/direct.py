@@ -10,9 +10,10 @@ A texel is the mean over its square, not its centre: Cycles bakes a texel by jit
 sample across it (a one-texel box), kept inside the face the centre lies on. Where the direct
 light bends sharply across a texel (a shadow's or a light's edge: `sharp_texels`), the texel's
 light is the mean of N x N points spread over its square inside its face (`footprint_points`;
-N is `LightmapSettings.direct_subsamples`); elsewhere the light is smooth enough that the centre is that mean to
-within SHARP_CONTRAST / 24 (half a per cent). Measured on the Cornell box: the ceiling around the lamp (whose back lights it from
-5 mm, a third of a texel) was 99 % of the whole bake's squared error at texel centres.
+N is `LightmapSettings.direct_subsamples`); elsewhere the light is smooth enough that the centre
+is that mean to within SHARP_CONTRAST / 24 (half a per cent). Measured on the Cornell box: the
+ceiling around the lamp (whose back lights it from 5 mm, a third of a texel) was 99 % of the
+whole bake's squared error at texel centres.
 """
 
 from __future__ import annotations
