@@ -98,9 +98,11 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
     clusters = None
     if 0 < settings.shooter_clusters < len(patches) and effects.interreflection:
         with timer.stage("clusters"):
-            # each surface's object, numbered in the names' order (a Surface object per face would cost more than the clusters)
+            # each patch's object, numbered in the names' order (from the index: a Surface per face
+            # cost more than the clusters)
             name_rank = np.argsort(np.argsort(np.array(scene.object_names, dtype=object)))
-            clusters = build_clusters(patches, settings.shooter_clusters, owner=name_rank[scene.object_index][patches.surface])
+            owner = name_rank[scene.object_index][patches.surface]
+            clusters = build_clusters(patches, settings.shooter_clusters, owner=owner)
     with gpu.resources() as res:
         with timer.stage("setup"):
             # the emitters' own emission is not in the residual: their pieces below shoot it
