@@ -61,3 +61,15 @@ def area_weighted_mean(solution, surface_index):
     mask = (patches.surface == surface_index) & ~patches.is_back
     area = patches.area[mask]
     return (solution.patch_radiosity[mask] * area[:, None]).sum(axis=0) / area.sum()
+
+
+def light_under_ceiling(gap: float) -> dict:
+    """A 2 x 2 m floor and ceiling 2 m apart; a 0.4 m emitter `gap` under the ceiling, facing down,
+    two-sided (its back lights the ceiling, as Blender's emission does)."""
+    floor = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]
+    ceiling = [[x, y, 2.0] for x, y, _ in floor][::-1]
+    light = [[x, y, 2.0 - gap] for x, y in [[0.8, 0.8], [1.2, 0.8], [1.2, 1.2], [0.8, 1.2]]][::-1]
+    surfaces = [surface("floor", floor, 0.5, 0.0), surface("ceiling", ceiling, 0.7, 0.0),
+                surface("light", light, 0.8, 10.0)]
+    surfaces[2]["two_sided"] = True
+    return {"surfaces": surfaces}

@@ -4,25 +4,14 @@ millimetres from another surface (a light plane under a ceiling)."""
 from __future__ import annotations
 
 import numpy as np
-from scenes import opposed_squares, surface
+from scenes import light_under_ceiling, opposed_squares, surface
 
 from radiosity_addon.core import SolveSettings, scene_from_dict, solve, subdivide
-from radiosity_addon.core.refinement import GAP_RESOLUTION, facing_gaps, within_budget
+from radiosity_addon.core.refinement import GAP_RESOLUTION, MIN_CUT, outline_cuts, within_budget
+from radiosity_addon.core.scene.gaps import facing_gaps
 from radiosity_addon.core.scene import split_patches
 from radiosity_addon.core.scene.geometry import bilinear
 from radiosity_addon.core.scene.analysis import effects_for
-
-
-def light_under_ceiling(gap: float) -> dict:
-    """A 2 x 2 m floor and ceiling 2 m apart; a 0.4 m emitter `gap` under the ceiling, facing down,
-    two-sided (its back lights the ceiling, as Blender's emission does)."""
-    floor = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]
-    ceiling = [[x, y, 2.0] for x, y, _ in floor][::-1]
-    light = [[x, y, 2.0 - gap] for x, y in [[0.8, 0.8], [1.2, 0.8], [1.2, 1.2], [0.8, 1.2]]][::-1]
-    surfaces = [surface("floor", floor, 0.5, 0.0), surface("ceiling", ceiling, 0.7, 0.0),
-                surface("light", light, 0.8, 10.0)]
-    surfaces[2]["two_sided"] = True
-    return {"surfaces": surfaces}
 
 
 def test_facing_gaps_measure_the_distance_to_the_facing_plane():
@@ -67,6 +56,52 @@ def test_the_gap_at_an_emitter_is_resolved_near_its_opening_even_where_no_light_
     ceiling = patches.surface == 1
     assert size[ceiling & near].max() <= resolution * gap * 1.01
     assert size[ceiling & (np.abs(from_outline) > 0.3)].min() >= 0.25
+
+
+def test_a_patch_is_cut_along_the_outline_that_crosses_it_nearest_its_middle():
+    scene = scene_from_dict(opposed_squares(0.01))
+    patches = subdivide(scene, 1, 0.5, np.zeros(len(scene), dtype=bool))
+    s_axis, t_axis = patches.corners[0, 1] - patches.corners[0, 0], patches.corners[0, 3] - patches.corners[0, 0]
+
+    def outline(s0, s1, t0, t1):  # a rectangle given in the patch's own parameters
+        return np.array([patches.corners[0, 0] + s * s_axis + t * t_axis + [0, 0, 0.01]
+                         for s, t in [(s0, t0), (s1, t0), (s1, t1), (s0, t1)]])
+
+    rows = np.zeros(4, dtype=np.int64)
+    outlines = np.stack([outline(0.3, 0.6, 0.2, 0.45),  # both edges cross: the nearer the middle
+                         outline(0.3, 1.4, -0.5, 0.7),  # one edge per direction inside
+                         outline(0.5 * MIN_CUT, 2.0, -1.0, 2.0),  # a sliver: the middle instead
+                         outline(-2.0, 3.0, 3.0, 4.0)])  # beside the patch: nothing crosses it
+    np.testing.assert_allclose(outline_cuts(patches, rows, outlines),
+                               [[0.6, 0.45], [0.3, 0.7], [0.5, 0.5], [0.5, 0.5]], atol=1e-9)
+    turned = outline(0.3, 0.6, 0.2, 0.45)[[0, 1, 2, 3]].copy()
+    turned[:, :2] = (turned[:, :2] - turned[:, :2].mean(axis=0)) @ np.array([[0.8, -0.6], [0.6, 0.8]]) \
+        + turned[:, :2].mean(axis=0)
+    np.testing.assert_allclose(outline_cuts(patches, rows[:1], turned[None]), [[0.5, 0.5]])  # no edge along a side
+
+
+def test_no_ceiling_patch_lies_astride_the_outline_of_an_emitter_under_it(gpu):
+    """An emitter 5 mm under a ceiling, its outline off the ceiling's halving grid (as in the
+    Cornell box): the trapped light is ~30 x the room's, and a ceiling patch half over the emitter
+    would send that mean into the room from its outer half. Every ceiling patch lies on one side
+    of the outline: cut along it, not halved across it."""
+    gap = 0.005
+    room = light_under_ceiling(gap)
+    x0, x1, y0, y1 = 0.71, 1.17, 0.83, 1.29
+    room["surfaces"][2]["vertices"] = [[x, y, 2.0 - gap] for x, y in [[x0, y0], [x1, y0], [x1, y1], [x0, y1]]][::-1]
+    scene = scene_from_dict(room)
+    solution = solve(scene, SolveSettings(method="hemicube", patch_size=2.0, refinements=6, tolerance=1e-2,
+                                          emitter_gap_resolution=8.0), gpu=gpu)
+    patches = solution.patches
+    ceiling = patches.corners[(patches.surface == 1) & ~patches.is_back]
+    inside_x = (ceiling[..., 0] > x0 - 1e-9) & (ceiling[..., 0] < x1 + 1e-9)
+    inside_y = (ceiling[..., 1] > y0 - 1e-9) & (ceiling[..., 1] < y1 + 1e-9)
+    over = (inside_x & inside_y).all(axis=1)
+    beside = ((ceiling[..., 0] <= x0 + 1e-9).all(axis=1) | (ceiling[..., 0] >= x1 - 1e-9).all(axis=1)
+              | (ceiling[..., 1] <= y0 + 1e-9).all(axis=1) | (ceiling[..., 1] >= y1 - 1e-9).all(axis=1))
+    assert over.sum() >= 4 and (over | beside).all(), f"{(~(over | beside)).sum()} ceiling patches lie astride"
+    size = np.sqrt(patches.area[(patches.surface == 1) & ~patches.is_back])
+    assert size.min() < 8.0 * gap * 1.01  # and the rim is still resolved down to the gap rule's size
 
 
 def test_refinement_keeps_within_a_patch_budget_counting_back_sides():

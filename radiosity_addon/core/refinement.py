@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .scene import Patches, split_patches
-from .scene.neighbours import near_pairs
+from .scene.gaps import OPPOSED_COSINE, distance_to_outline, facing_partners
 from .shooting import emitter_pieces, lamps_as_shooters, light_at_points
 from .shooting.sky import SKY_HEMICUBE_RESOLUTION, element_frames, sky_fractions
 from .uvspace import patch_material_values
@@ -32,51 +32,8 @@ GAP_RESOLUTION = 2.0  # patches facing another surface closely are split down to
 SMALLEST_PATCH = 1 / 1024  # of the scene's diameter: no split below it
 REFINE_MIN_PATCHES = 2000  # the spread rule may add this many patches whatever the scene's size
 RIM_GAPS = 3.0  # within this many gaps (plus its size) of a gap's opening, a patch facing across it is split
-OPPOSED_COSINE = 0.7  # a gap is between surfaces turned towards each other (not two walls at a corner)
-
-
-def facing_partners(patches: Patches, candidates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """For each candidate, the distance from its centre to the plane of the nearest patch of another
-    surface that faces it (both fronts towards each other) with its bounding sphere within twice the
-    candidate's size, and that patch: ((len(candidates),) float, inf where none does; (len,) int, -1).
-    A 5 mm gap between an emitter and a ceiling is such a distance: the light trapped between them
-    escapes through it."""
-    centre, normal = patches.center, patches.normal
-    radius = np.linalg.norm(patches.corners - centre[:, None], axis=2).max(axis=1)
-    gaps = np.full(len(candidates), np.inf)
-    partners = np.full(len(candidates), -1, dtype=np.int64)
-    for query, other in near_pairs(centre, radius, candidates, 2 * radius[candidates]):
-        rows = candidates[query]
-        offset = centre[other] - centre[rows]  # candidate -> other
-        facing = (np.einsum("nd,nd->n", offset, normal[rows]) > 0) & (np.einsum("nd,nd->n", offset, normal[other]) < 0)
-        close = facing & (patches.surface[other] != patches.surface[rows])
-        query, other = query[close], other[close]
-        gap = np.abs(np.einsum("nd,nd->n", offset[close], normal[other]))
-        order = np.lexsort((gap, query))  # per query, its smallest gap first
-        first = order[np.r_[True, query[order][1:] != query[order][:-1]]] if len(order) else order
-        better = gap[first] < gaps[query[first]]
-        gaps[query[first][better]] = gap[first][better]
-        partners[query[first][better]] = other[first][better]
-    return gaps, partners
-
-
-def facing_gaps(patches: Patches, candidates: np.ndarray) -> np.ndarray:
-    """The gaps of `facing_partners`."""
-    return facing_partners(patches, candidates)[0]
-
-
-def distance_to_outline(points: np.ndarray, polygons: np.ndarray) -> np.ndarray:
-    """(N,) distance from each point (N, 3), projected onto the plane of its polygon (N, 4, 3; a
-    triangle repeats its last corner), to that polygon's outline."""
-    edges = np.roll(polygons, -1, axis=1) - polygons  # (N, 4, 3)
-    normal = np.cross(polygons[:, 2] - polygons[:, 0], polygons[:, 3] - polygons[:, 1])
-    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
-    flat = points - np.einsum("nd,nd->n", points - polygons[:, 0], normal)[:, None] * normal
-    relative = flat[:, None] - polygons
-    length2 = np.maximum(np.einsum("nkd,nkd->nk", edges, edges), 1e-300)
-    along = np.clip(np.einsum("nkd,nkd->nk", relative, edges) / length2, 0.0, 1.0)
-    nearest = polygons + along[..., None] * edges
-    return np.linalg.norm(flat[:, None] - nearest, axis=2).min(axis=1)
+MIN_CUT = 0.1  # a patch is cut along an outline no nearer than this to its side (no slivers)
+OUTLINE_PARALLEL = 0.05  # an outline edge runs along a patch's side when it strays less than this per unit
 
 
 def near_an_opening(patches: Patches, scene_corners: np.ndarray, rows: np.ndarray, partners: np.ndarray,
@@ -93,10 +50,43 @@ def near_an_opening(patches: Patches, scene_corners: np.ndarray, rows: np.ndarra
     return opposed & (np.minimum(own, theirs) < size + RIM_GAPS * gaps)
 
 
+def outline_cuts(patches: Patches, rows: np.ndarray, outlines: np.ndarray) -> np.ndarray:
+    """(len(rows), 2) the parameters (s, t) at which to cut the quads `rows` 2 x 2 so that no
+    child lies astride an edge of their `outlines` (len(rows), 4, 3; an emitter's outline seen
+    across a gap, say): along each direction, where an outline edge running along the other
+    direction crosses the patch nearest its middle; the middle where none does or the cut would
+    leave a sliver (within MIN_CUT of a side; the next round cuts the smaller child there).
+    A ceiling patch astride the outline of an emitter 5 mm under it is half in the trapped light
+    and half out: its mean, sent into the room from its outer half, makes the room too bright."""
+    corners = patches.corners[rows]
+    along_s = 0.5 * (corners[:, 1] - corners[:, 0] + corners[:, 2] - corners[:, 3])
+    along_t = 0.5 * (corners[:, 3] - corners[:, 0] + corners[:, 2] - corners[:, 1])
+    basis = np.stack([along_s, along_t], axis=1)  # (n, 2, 3)
+    gram = np.einsum("nkd,njd->nkj", basis, basis)
+    projected = np.einsum("ncd,njd->ncj", outlines - corners[:, :1], basis)  # (n, 4, 2)
+    st = np.linalg.solve(gram[:, None], projected[..., None])[..., 0]  # outline corners in (s, t)
+    start, delta = st, np.roll(st, -1, axis=1) - st
+    cuts = np.full((len(rows), 2), 0.5)
+    for axis in (0, 1):
+        other = 1 - axis
+        value = start[..., axis] + 0.5 * delta[..., axis]
+        low = np.minimum(start[..., other], start[..., other] + delta[..., other])
+        high = np.maximum(start[..., other], start[..., other] + delta[..., other])
+        usable = ((np.abs(delta[..., axis]) <= OUTLINE_PARALLEL * np.abs(delta[..., other])) & (low < 1) & (high > 0)
+                  & (value > MIN_CUT) & (value < 1 - MIN_CUT))
+        offset = np.where(usable, np.abs(value - 0.5), np.inf)
+        best = offset.argmin(axis=1)
+        found = np.isfinite(offset[np.arange(len(rows)), best])
+        cuts[found, axis] = value[np.arange(len(rows)), best][found]
+    return cuts
+
+
 def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: float, min_size: float,
-                      scene_corners: np.ndarray | None = None, emitter_gap_resolution: float = 2.0) -> np.ndarray:
+                      scene_corners: np.ndarray | None = None,
+                      emitter_gap_resolution: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
     """(P,) float priority of each patch's split (0: not split; the gap rule's splits first, then
-    the largest patches): patches that another surface faces from closer than their size (they are split
+    the largest patches) and (P, 2) where to cut each (`split_patches`' `at`: the middle, or
+    along the outline across an emitter's gap, `outline_cuts`): patches that another surface faces from closer than their size (they are split
     until they are GAP_RESOLUTION times the gap: a patch sends its light as if uniform, and across a
     gap that light lands within a gap's width), that are still larger than `min_size`, and either
     - whose elements' light spreads more than `threshold` of their mean (plus the floor), or
@@ -120,6 +110,7 @@ def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: fl
     gaps, partners = facing_partners(patches, candidates)
     close = size[candidates] > GAP_RESOLUTION * gaps
     priority = np.zeros(len(patches))
+    cuts = np.full((len(patches), 2), 0.5)
     spread_rule = candidates[close & uneven[candidates]]
     priority[spread_rule] = area[spread_rule]
     if scene_corners is not None:
@@ -127,7 +118,10 @@ def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: fl
         rows = candidates[cavity]
         opening = near_an_opening(patches, scene_corners, rows, partners[cavity], gaps[cavity])
         priority[rows[opening]] = np.inf
-    return priority
+        quads = opening & ~patches.is_triangle[rows]
+        cuts[rows[quads]] = outline_cuts(patches, rows[quads],
+                                         scene_corners[patches.surface[partners[cavity][quads]]])
+    return priority, cuts
 
 
 def added_by_splitting(patches: Patches, rows: np.ndarray) -> np.ndarray:
@@ -217,7 +211,7 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
                 light[fresh] = probe_light(gpu, scene, patches, fresh, now_shooting, settings, effects, elements)
             shooters = now_shooting
             min_size = SMALLEST_PATCH * scene.diameter
-            priority = patches_to_refine(patches, light, settings.refine_threshold, min_size, scene.corners,
+            priority, cuts = patches_to_refine(patches, light, settings.refine_threshold, min_size, scene.corners,
                                          settings.emitter_gap_resolution)
             gap_rule = np.isinf(priority)
             spread = within_budget(patches, np.where(gap_rule, 0.0, priority), len(patches) + spread_room)
@@ -226,7 +220,7 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
             if not split.any():
                 break
             refined.append(int(split.sum()))
-            before, patches = patches, split_patches(patches, split, backs)
+            before, patches = patches, split_patches(patches, split, backs, cuts)
             light_of = unchanged_patches(before, patches)
             if scene.material_maps:
                 patches.reflectance, patches.emission = patch_material_values(gpu, scene, patches)

@@ -27,7 +27,7 @@ from ..shooting import (DirectLightWork, ElementTextures, PatchBuffers, PatchSho
                         emitter_pieces, patch_means, shoot_lamps, shoot_sky)
 from ..timing import StageTimer
 from ..visibility import VARIANTS
-from .clusters import ClusteredSelection, build_clusters
+from .clusters import ClusteredSelection, build_clusters, cluster_owners
 from .ledger import EnergyLedger, ambient_term, remainder_light, remainder_power, time_left
 from .selection import READBACK, ResidualReader
 
@@ -98,11 +98,7 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
     clusters = None
     if 0 < settings.shooter_clusters < len(patches) and effects.interreflection:
         with timer.stage("clusters"):
-            # each patch's object, numbered in the names' order (from the index: a Surface per face
-            # cost more than the clusters)
-            name_rank = np.argsort(np.argsort(np.array(scene.object_names, dtype=object)))
-            owner = name_rank[scene.object_index][patches.surface]
-            clusters = build_clusters(patches, settings.shooter_clusters, owner=owner)
+            clusters = build_clusters(patches, settings.shooter_clusters, owner=cluster_owners(scene, patches))
     with gpu.resources() as res:
         with timer.stage("setup"):
             # the emitters' own emission is not in the residual: their pieces below shoot it

@@ -41,6 +41,14 @@ def bilinear(corners: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
     return c0 * (1 - s) * (1 - t) + c1 * s * (1 - t) + c2 * s * t + c3 * (1 - s) * t
 
 
+def bilinear_each(corners: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """corners (P, 4, D); s, t (P, ...) parameters of each patch's own points -> (P, ..., D)."""
+    s, t = np.asarray(s, dtype=np.float64)[..., None], np.asarray(t, dtype=np.float64)[..., None]
+    expand = (slice(None),) + (None,) * (s.ndim - 2)
+    c0, c1, c2, c3 = (corners[expand + (k,)] for k in range(4))
+    return c0 * (1 - s) * (1 - t) + c1 * s * (1 - t) + c2 * s * t + c3 * (1 - s) * t
+
+
 def tangent_frame(normal: np.ndarray, hint: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Unit x, y completing a right-handed frame (x, y, normal); x along `hint` when given."""
     normal = np.asarray(normal, dtype=np.float64)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..settings import MAX_SPLIT
-from .geometry import area_centroid, area_vector, bilinear, reversed_corners
+from .geometry import area_centroid, area_vector, bilinear, bilinear_each, reversed_corners
 from .model import Scene
 
 
@@ -139,18 +139,26 @@ def fronts_of(patches: Patches) -> Patches:
                    is_triangle=patches.is_triangle[:count], grid=patches.grid[:count], split=patches.split)
 
 
-def split_patches(patches: Patches, mask: np.ndarray, backs: np.ndarray) -> Patches:
+def split_patches(patches: Patches, mask: np.ndarray, backs: np.ndarray, at: np.ndarray | None = None) -> Patches:
     """Every patch in `mask` (P,) (or whose twin is) replaced by its 2 x 2 bilinear children — a
     triangle's top children are triangles again — and the backs of the surfaces in `backs` (S,)
-    made anew. Children keep their parent's place, so patches of a surface stay together."""
+    made anew. A quad is cut at its parameters `at` (P, 2) (s, t), its middle (0.5, 0.5) when
+    not given: a cut along an outline that crosses it (`refinement.outline_cuts`) leaves no child
+    astride that outline. Children keep their parent's place, so patches of a surface stay together."""
     count = patches.front_count
     chosen = mask[:count].copy()
     twins = patches.twin[:count]
     chosen[twins >= 0] |= mask[twins[twins >= 0]]
     fronts = fronts_of(patches)
     params, rows, _ = quad_grid(2, 2)
-    children = bilinear(fronts.corners[chosen], params[..., 0], params[..., 1])  # (n, 4, 4, 3)
-    child_uv = bilinear(fronts.uv[chosen], params[..., 0], params[..., 1])
+    cut = np.full((count, 2), 0.5)
+    if at is not None:  # (a front split only for its back's sake is cut in the middle)
+        own = mask[:count] & ~fronts.is_triangle
+        cut[own] = at[:count][own]
+    # the grid's middle parameter (0.5) moved to each patch's cut
+    params = np.where(params[None] == 0.5, cut[chosen][:, None, None, :], params[None])  # (n, 4, 4, 2)
+    children = bilinear_each(fronts.corners[chosen], params[..., 0], params[..., 1])  # (n, 4, 4, 3)
+    child_uv = bilinear_each(fronts.uv[chosen], params[..., 0], params[..., 1])
     repeat = np.where(chosen, 4, 1)
     take = np.repeat(np.arange(count), repeat)
     corners = fronts.corners[take].copy()
