@@ -4,10 +4,11 @@
 //   H += sum_k B_k * F(texel point -> shooter k) * V,
 // F and V as the shooting pass over elements computes them ("shot"). A texel carries the world
 // point its centre shows (on the patch whose UV footprint holds it), its normal and its plane.
-// The pieces of one emitting polygon (a group) are there for their visibility: the group sends
-//   B * F(texel -> whole polygon) * sum_k w_k V_k / sum_k w_k,  w_k = F_disk(texel -> piece k),
+// The pieces of one emitting polygon (a group) are there for their visibility and their own
+// radiosity B_k (an emitter's reflected light is not uniform): the group sends
+//   F(texel -> whole polygon) * sum_k w_k V_k B_k / sum_k w_k,  w_k = F_disk(texel -> piece k),
 // Lambert's exact factor once per polygon instead of once per piece (the costly part), exact
-// wherever all or none of the pieces are seen, and the penumbra weighted piece by piece.
+// wherever all or none of the pieces are seen and B is uniform, the penumbra weighted piece by piece.
 #include "bindings"
 #include "constants"
 #include "kernels"
@@ -40,17 +41,18 @@ void main() {
     }
     for (int g = 0; g < group_count; ++g) {
         int first = int(group_corner[4 * g].w), end = int(group_corner[4 * g + 1].w);
-        float seen = 0.0, weights = 0.0;
+        vec3 seen = vec3(0.0);
+        float weights = 0.0;
         for (int k = first; k < end; ++k) {
             float w = disk_form_factor(shots[k].eye_area.xyz, shots[k].normal_w.xyz, shots[k].eye_area.w, x, n);
             if (w > 0.0) {
                 weights += w;
-                seen += shot_sees(k, x, n, plane) ? w : 0.0;
+                seen += shot_sees(k, x, n, plane) ? w * shots[k].radiosity.rgb : vec3(0.0);
             }
         }
         vec3 polygon[4] = vec3[4](group_corner[4 * g].xyz, group_corner[4 * g + 1].xyz, group_corner[4 * g + 2].xyz,
                                   group_corner[4 * g + 3].xyz);
-        gathered += shots[first].radiosity.rgb * polygon_form_factor(polygon, x, n) * (seen / max(weights, 1e-30));
+        gathered += polygon_form_factor(polygon, x, n) * (seen / max(weights, 1e-30));
     }
     if (gathered != vec3(0.0)) {
         texel_light[t] += vec4(gathered, 0.0);

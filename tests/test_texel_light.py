@@ -9,7 +9,8 @@ import pytest
 from scenes import box_faces, surface
 
 from radiosity_addon.core import (LightmapSettings, SolveSettings, bake_lightmaps, point_to_polygon,
-                                  scene_from_dict, solve)
+                                  scene_from_dict, solve, subdivide)
+from radiosity_addon.core.lightmap.direct import direct_light
 
 FLOOR = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]
 UV = [[0, 0], [1, 0], [1, 1], [0, 1]]
@@ -170,3 +171,54 @@ def test_the_solves_own_direct_light_keeps_penumbrae_and_leaks_nowhere(gpu):
     assert (areas * measured).sum() == pytest.approx((areas * exact).sum(), rel=0.015)
     relative_rms = np.sqrt((areas * (measured - exact) ** 2).sum() / (areas * exact ** 2).sum())
     assert relative_rms < 0.05
+
+
+@pytest.mark.parametrize("method", ["hemicube", "progressive"])
+def test_the_light_trapped_over_an_emitters_back_is_counted_once(gpu, method):
+    """A 0.4 m two-sided emitter 5 mm under a 2 m ceiling. Over its middle the two are parallel
+    plates: the ceiling gets H = E / (1 - ρ_light ρ_ceiling) (E straight from the emitter's back,
+    the rest what the back reflects of the ceiling's light). The texels take the emitter's light
+    and what it reflects from its pieces (`emitters_reflected_light`), the rest from the solve's
+    elements less the same: counted once, not twice (22.7 here, 30 if counted twice)."""
+    gap, emission, light_reflectance, ceiling_reflectance = 0.005, 10.0, 0.8, 0.7
+    floor = {**surface("floor", FLOOR, 0.5, 0.0), "uv": UV}
+    ceiling_corners = [[x, y, 2.0] for x, y, _ in FLOOR][::-1]
+    ceiling = {**surface("ceiling", ceiling_corners, ceiling_reflectance, 0.0), "uv": UV}
+    light = surface("light", [[x, y, 2.0 - gap] for x, y in [[0.8, 0.8], [1.2, 0.8], [1.2, 1.2], [0.8, 1.2]]][::-1],
+                    light_reflectance, emission)
+    light["two_sided"] = True
+    scene = scene_from_dict({"surfaces": [floor, ceiling, light]})
+    solution = solve(scene, SolveSettings(method=method, patch_size=0.5, refinements=4, tolerance=1e-3), gpu=gpu)
+    lightmap = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16, content="light"), gpu=gpu)["ceiling"]
+    centres = texel_centres(lightmap.size, ceiling_corners)
+    middle = (np.abs(centres[..., 0] - 1.0) < 0.1) & (np.abs(centres[..., 1] - 1.0) < 0.1) & (lightmap.patch_index >= 0)
+    assert middle.sum() >= 4
+    expected = emission / (1 - light_reflectance * ceiling_reflectance)
+    np.testing.assert_allclose(lightmap.rgba[middle][:, 0], expected, rtol=0.03)
+
+
+def test_an_emitters_pieces_send_their_own_reflected_light(gpu):
+    """The texel pass sends an emitter's light and what it reflects from its pieces, each piece
+    with its own mean of what its patches reflect (`piece_means`), weighted by how much of each
+    piece a point sees: uniform reflection R scales the light by (E + R) / E exactly; more on one
+    half lights the floor under that half more, and the two halves' light adds up to the whole."""
+    emitter_corners = [[0.5, 0.75, 0.3], [0.5, 1.25, 0.3], [1.5, 1.25, 0.3], [1.5, 0.75, 0.3]]
+    floor = surface("floor", FLOOR, 0.5, 0.0)
+    scene = scene_from_dict({"surfaces": [floor, surface("emitter", emitter_corners, 0.5, 2.0)]})
+    patches = subdivide(scene, 4, 0.5, np.zeros(len(scene), dtype=bool))
+    points = np.array([[0.75, 1.0, 0.0], [1.25, 1.0, 0.0], [1.0, 1.0, 0.0]])
+    owners = np.zeros(len(points), dtype=np.int64)  # a floor patch: the points' plane and normal
+
+    def light(reflected):
+        return direct_light(gpu, scene, patches, points, owners, "hemicube", 256, True, 2, reflected)[0][:, 0]
+
+    plain = light(None)
+    emits = patches.surface == 1
+    uniform = np.where(emits[:, None], 1.0, 0.0) * np.ones((1, 3))
+    np.testing.assert_allclose(light(uniform), plain * 1.5, rtol=1e-4)
+    left = np.where((emits & (patches.center[:, 0] < 1.0))[:, None], 1.0, 0.0) * np.ones((1, 3))
+    right = uniform - left
+    from_left, from_right = light(left) - plain, light(right) - plain
+    assert from_left[0] > 2 * from_left[1] and from_right[1] > 2 * from_right[0]
+    np.testing.assert_allclose(from_left + from_right, plain * 0.5, rtol=1e-4)
+    np.testing.assert_allclose(from_left[2], from_right[2], rtol=1e-3)  # the middle sees both alike

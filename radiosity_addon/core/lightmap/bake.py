@@ -30,7 +30,9 @@ from ..solution import Solution
 from ..uvspace import rasterize
 from . import charts
 from .contact import in_contact
-from .direct import direct_light, footprint_points, sharp_texels, texel_axes, texel_points
+from ..shooting.sky import element_frames
+from .direct import (direct_light, emitters_reflected_light, emitters_reflection, footprint_points, sharp_texels,
+                     texel_axes, texel_points)
 from .lattice import continuous_lattice, element_values
 from .mips import filled_image, mip_levels
 from .size import resolve_size
@@ -155,8 +157,11 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     mapped = np.isin(patches.surface, [i for name in scene.material_maps for i in scene.object_surfaces.get(name, ())])
     # what is interpolated: the light H (less its direct part when texels get that), or B for
     # "combined" where no material map turns H into B texel by texel
+    reflected = emitters_reflection(patches, solution.patch_radiosity) if per_texel else None
     if per_texel:
         values = element_values(solution, light=True) - element_values(solution, direct=True)
+        if reflected is not None:  # the texels take it from the emitters' pieces too (`add_direct_light`)
+            values = values - reflected_light_at_elements(gpu, solution, settings, reflected, values.shape[1])
     elif light or mapped.any():
         values = element_values(solution, light=True)
         if not light:
@@ -193,7 +198,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
             axes[mine] = texel_axes(patches, mine, corners_texels)
             rasters[name] = (texel_values.astype(np.float64), signed_ids, mine, points)
         if per_texel:
-            add_direct_light(lightmap_gpu, solution, rasters, settings, axes)
+            add_direct_light(lightmap_gpu, solution, rasters, settings, axes, reflected)
         clear_contacts(scene, patches, rasters, holds_b=~mapped if not (per_texel or light) else None)
     lightmaps = {}
     for name, (texel_values, signed_ids, mine, points) in rasters.items():
@@ -241,16 +246,31 @@ def clear_contacts(scene: Scene, patches, rasters: dict, holds_b: np.ndarray | N
         texel_values[covered] = values
 
 
+def reflected_light_at_elements(gpu: GPU | None, solution: Solution, settings: LightmapSettings,
+                                reflected: np.ndarray, elements: int) -> np.ndarray:
+    """(P, S, S, 3) the light the elements' centres get from what the emitters reflect
+    (`emitters_reflected_light`): the part of the solve's light the texels recompute."""
+    patches, report = solution.patches, solution.report
+    points = element_frames(patches, elements)[0]
+    owners = np.repeat(np.arange(len(patches)), elements * elements)
+    with open_gpu(gpu) as own_gpu:
+        light = emitters_reflected_light(own_gpu, solution.scene, patches, points, owners, reflected,
+                                         report.settings.visibility, settings.direct_map_resolution,
+                                         report.effects.occlusion, settings.direct_pieces)
+    return light.reshape(len(patches), elements, elements, 3)
+
+
 def add_direct_light(gpu: GPU, solution: Solution, rasters: dict, settings: LightmapSettings,
-                     axes: np.ndarray) -> None:
+                     axes: np.ndarray, reflected: np.ndarray | None = None) -> None:
     """Add every lightmap's direct light texel by texel (one pass over all texels per shot), the
     mean over the texel's square where it is sharp (a second pass over those texels' points;
-    `axes` (P, 3, 2): each patch's world step per texel)."""
+    `axes` (P, 3, 2): each patch's world step per texel); the emitters send what they reflect of
+    `reflected` (P, 3) too, when given."""
     points, owners, counts = covered_texels(rasters)
     report = solution.report
     shoot = lambda at, on: direct_light(  # noqa: E731
         gpu, solution.scene, solution.patches, at, on, report.settings.visibility, settings.direct_map_resolution,
-        report.effects.occlusion, settings.direct_pieces)[0]
+        report.effects.occlusion, settings.direct_pieces, reflected)[0]
     light = shoot(points, owners)
     masks = [entry[3][2] for entry in rasters.values()]
     images, faces, start = [], [], 0

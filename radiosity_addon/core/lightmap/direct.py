@@ -24,8 +24,10 @@ from ..gpu import GPU
 from ..scene import Patches, Scene
 from ..scene.geometry import bilinear
 from ..settings import VISIBILITY_VARIANTS
-from ..shooting import direct_shooters, light_at_points
+from ..shooting import direct_shooters, emitter_shooters, light_at_points
 from ..uvspace import rasterize
+
+REFLECTION_FLOOR = 1e-4  # emitters reflecting less than this share of the brightest emission are not shot again
 
 
 def texel_points(gpu: GPU, patches: Patches, rows: np.ndarray, corners_texels: np.ndarray, size) -> tuple:
@@ -101,11 +103,36 @@ def footprint_points(scene: Scene, patches: Patches, centres: np.ndarray, owners
     return np.concatenate([points, centres[lone]]), np.concatenate([texel, lone])
 
 
+def emitters_reflection(patches: Patches, radiosity: np.ndarray) -> np.ndarray | None:
+    """(P, 3) what each emitting patch reflects, B - E (0 elsewhere), or None where emitters
+    reflect nothing worth a pass (under REFLECTION_FLOOR of their emission)."""
+    emits = np.any(patches.emission > 0, axis=1)
+    if not emits.any():
+        return None
+    radiosity = np.broadcast_to(np.asarray(radiosity, dtype=np.float64), patches.emission.shape)
+    reflected = np.where(emits[:, None], np.maximum(radiosity - patches.emission, 0.0), 0.0)
+    return reflected if reflected.max() > REFLECTION_FLOOR * patches.emission.max() else None
+
+
+def emitters_reflected_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray,
+                             reflected: np.ndarray, visibility: str, resolution: int, occlusion: bool,
+                             pieces: int) -> np.ndarray:
+    """(N, 3) the light at `points` (on the patches `owners`) from what the emitters reflect,
+    `reflected` (P, 3), shot from their pieces as `direct_light` shoots it: the part of the
+    solve's element light that the texels take from `direct_light(..., reflected)` instead."""
+    shooters = emitter_shooters(scene, patches, pieces, reflected, emission=False)
+    variant = visibility if visibility in VISIBILITY_VARIANTS else "hemicube"
+    with gpu.resources() as res:
+        return light_at_points(res, scene, patches, points, owners, shooters, variant, resolution, occlusion)
+
+
 def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray,
-                 visibility: str, resolution: int, occlusion: bool, pieces: int) -> tuple[np.ndarray, int]:
+                 visibility: str, resolution: int, occlusion: bool, pieces: int,
+                 reflected: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """(N, 3) direct light H at `points` (N, 3) lying on the patches `owners` (N,), and the
-    number of shots (emitters and area lamps in up to `pieces` x `pieces` each)."""
-    shooters = direct_shooters(scene, patches, pieces)
+    number of shots (emitters and area lamps in up to `pieces` x `pieces` each; the emitters
+    send what they reflect of `reflected` (P, 3) too, when given)."""
+    shooters = direct_shooters(scene, patches, pieces, reflected)
     variant = visibility if visibility in VISIBILITY_VARIANTS else "hemicube"
     with gpu.resources() as res:
         light = light_at_points(res, scene, patches, points, owners, shooters, variant, resolution, occlusion)

@@ -11,7 +11,7 @@ of its element light it is, so only the smooth rest is interpolated.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -57,17 +57,17 @@ def emitter_pieces(scene: Scene, patches: Patches, occlusion: bool = True,
     polygons facing one way and as many for their backs (8 x 8 at most each); whole where nothing
     occludes. They shoot for no patch: the emission is not in the residual (`ElementTextures`)."""
     polygons = emitting_polygons(scene, patches)
-    power = [np.linalg.norm(np.cross(c[2] - c[0], c[3] - c[1])) / 2 * e.sum() for c, e, _, _ in polygons]
-    fronts = sum(1 for *_, back in polygons if not back)
+    power = [np.linalg.norm(np.cross(c[2] - c[0], c[3] - c[1])) / 2 * e.sum() for c, e, *_ in polygons]
+    fronts = sum(1 for _, _, _, back, _ in polygons if not back)
     split = int(np.clip(np.sqrt(budget / max(fronts, 1)), 1, AREA_LAMP_MAX_SPLIT)) if occlusion else 1
     return [piece for k in np.argsort(-np.asarray(power), kind="stable")
             for piece in polygon_shooters(polygons[k][0], polygons[k][1], scene.diameter, max_split=split)]
 
 
-def emitting_polygons(scene: Scene, patches: Patches) -> list[tuple[np.ndarray, np.ndarray, int, bool]]:
-    """(corners (4, 3), emission (3,), patch or -1, a back) of what emits: each side of an
-    emissive surface whole when its patches all emit alike (its light does not depend on how
-    refinement split it), else its patches one by one (a textured emission)."""
+def emitting_polygons(scene: Scene, patches: Patches) -> list[tuple[np.ndarray, np.ndarray, int, bool, np.ndarray]]:
+    """(corners (4, 3), emission (3,), patch or -1, a back, the patches it is) of what emits:
+    each side of an emissive surface whole when its patches all emit alike (its light does not
+    depend on how refinement split it), else its patches one by one (a textured emission)."""
     emitting = np.flatnonzero(np.any(patches.emission > 0, axis=1))
     side = patches.surface[emitting] * 2 + patches.is_back[emitting]
     order = np.argsort(side, kind="stable")
@@ -80,21 +80,50 @@ def emitting_polygons(scene: Scene, patches: Patches) -> list[tuple[np.ndarray, 
             corners = scene.corners[surface:surface + 1]
             if patches.is_back[group[0]]:
                 corners = reversed_corners(corners, scene.corner_count[surface:surface + 1] == 3)
-            polygons.append((corners[0], emission[0], -1, bool(patches.is_back[group[0]])))
+            polygons.append((corners[0], emission[0], -1, bool(patches.is_back[group[0]]), group))
         else:
-            polygons.extend((patches.corners[p], patches.emission[p], int(p), bool(patches.is_back[p])) for p in group)
+            polygons.extend((patches.corners[p], patches.emission[p], int(p), bool(patches.is_back[p]), group[k:k + 1])
+                            for k, p in enumerate(group))
     return polygons
 
 
-def direct_shooters(scene: Scene, patches: Patches, max_split: int = AREA_LAMP_MAX_SPLIT) -> list[Shooter]:
-    """Every shot of the lightmaps' direct light: the lamps', and the emitting polygons' in pieces,
-    at most `max_split` x `max_split` each (one piece each when there are more than
-    MAX_SPLIT_EMITTERS of them)."""
+def piece_means(pieces: list[Shooter], centres: np.ndarray, areas: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """(len(pieces), 3) the area-weighted mean of `values` (n, 3) over the patches (centres (n, 3),
+    areas (n,)) nearest each piece's centre; a piece nearest to none takes the mean of all."""
+    positions = np.array([piece.position for piece in pieces])
+    nearest = np.argmin(((centres[:, None] - positions[None]) ** 2).sum(axis=2), axis=1)
+    weight = np.bincount(nearest, areas, len(pieces))
+    sums = np.stack([np.bincount(nearest, areas * values[:, c], len(pieces)) for c in range(3)], axis=1)
+    overall = (areas[:, None] * values).sum(axis=0) / max(float(areas.sum()), 1e-300)
+    return np.where(weight[:, None] > 0, sums / np.maximum(weight, 1e-300)[:, None], overall)
+
+
+def emitter_shooters(scene: Scene, patches: Patches, max_split: int, reflected: np.ndarray | None = None,
+                     emission: bool = True) -> list[Shooter]:
+    """The emitting polygons' shots in pieces, at most `max_split` x `max_split` each (one piece
+    each when there are more than MAX_SPLIT_EMITTERS of them), each sending its emission (unless
+    not `emission`) plus the mean over its patches of `reflected` (P, 3): what an emitter
+    reflects lights what faces it as sharply as what it emits (a ceiling 5 mm over a light's
+    back gets both, the light's texels change within a gap of its outline). Polygons that would
+    send nothing are left out."""
     polygons = emitting_polygons(scene, patches)
     size = scene.diameter if len(polygons) <= MAX_SPLIT_EMITTERS else np.inf
-    return lamps_as_shooters(scene, max_split) + [
-        piece for corners, emission, patch, _ in polygons
-        for piece in polygon_shooters(corners, emission, size, patch=patch, max_split=max_split)]
+    shooters = []
+    for corners, emitted, patch, _, members in polygons:
+        pieces = polygon_shooters(corners, emitted if emission else np.zeros(3), size, patch=patch, max_split=max_split)
+        if reflected is not None:
+            extra = piece_means(pieces, patches.center[members], patches.area[members], reflected[members])
+            pieces = [replace(piece, radiosity=piece.radiosity + more) for piece, more in zip(pieces, extra)]
+        if any(np.any(piece.radiosity > 0) for piece in pieces):
+            shooters.extend(pieces)
+    return shooters
+
+
+def direct_shooters(scene: Scene, patches: Patches, max_split: int = AREA_LAMP_MAX_SPLIT,
+                    reflected: np.ndarray | None = None) -> list[Shooter]:
+    """Every shot of the lightmaps' direct light: the lamps', and the emitting polygons' in pieces
+    (`emitter_shooters`, with what they reflect of `reflected` (P, 3) when given)."""
+    return lamps_as_shooters(scene, max_split) + emitter_shooters(scene, patches, max_split, reflected)
 
 
 def shoot_lamps(scene: Scene, shooting: ShootingPass) -> DirectLightWork:
