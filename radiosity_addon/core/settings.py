@@ -16,8 +16,9 @@ KERNELS = ("exact", "disk")
 SHOOTING_POINTS = ("centroid", "centre")
 QUALITIES = ("draft", "good", "final")
 # what each quality sets (the dataclass defaults below are "final"'s); the bench measures what each
-# costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft 10.5 % in ~17 s,
-# good 8.9 % in ~24 s, final 4.4 % in ~350 s; on the Cornell box 11.5 %, 5.1 % and 3.0 %).
+# costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft 9.0 % in ~18 s,
+# good 7.3 % in ~27 s, final 4.6 % in ~365 s; on the Cornell box 4.7 %, 4.7 % and 2.2 %). final's
+# hemi-cubes are good's: 128 pixels and 2 x 2 per patch made the Cornell box worse (3.2 %) in 21 s.
 # Tolerances per method: progressive, the unshot power left relative to the emitted; hemi-cube,
 # the change per sweep relative to max B.
 QUALITY_PRESETS = {
@@ -32,7 +33,7 @@ QUALITY_PRESETS = {
              "tolerance": {"progressive": 2e-2, "hemicube": 1e-5},
              "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 4, "direct_subsamples": 2}},
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
-                        "hemicube_res": 128, "hemicube_elements": 2, "emitter_gap_resolution": 4.0, "refine_budget": 1.0},
+                        "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0},
               "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
               "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 8, "direct_subsamples": 4}},
 }
@@ -54,8 +55,8 @@ class SolveSettings:
     subdiv: int | None = None  # N: every surface split N x N into patches; None: split by patch_size
     patch_size: float = PATCH_SIZE  # with subdiv None: longest patch side in scene units
     elements: int = 4  # S x S elements per patch (progressive), S a power of two
-    hemicube_res: int = 128  # pixels across the hemi-cube's top face
-    hemicube_elements: int = 2  # hemi-cube method: S x S receiving elements (hemi-cubes) per patch
+    hemicube_res: int = 64  # pixels across the hemi-cube's top face
+    hemicube_elements: int = 1  # hemi-cube method: S x S receiving elements (hemi-cubes) per patch
     solver: str = "gauss-seidel"  # fewer sweeps than Jacobi (docs/architecture.md: measured on llvmpipe)
     tolerance: float | None = None  # None: the method's default
     max_iterations: int = 100_000  # linear solvers
