@@ -15,7 +15,8 @@ VISIBILITY_VARIANTS = ("hemicube", "plain", "tessellated", "search", "guarded") 
 KERNELS = ("exact", "disk")
 SHOOTING_POINTS = ("centroid", "centre")
 QUALITIES = ("draft", "good", "final")
-# what each quality sets (the dataclass defaults below are "final"'s); the bench measures what each
+# what each quality sets (the dataclass defaults below are "final"'s but for the hemi-cubes, the
+# finer ones the analytic tests are written for); the bench measures what each
 # costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft 9.0 % in ~18 s,
 # good 7.3 % in ~27 s, final 4.6 % in ~365 s; on the Cornell box 4.7 %, 4.7 % and 2.2 %). final's
 # hemi-cubes are good's: 128 pixels and 2 x 2 per patch made the Cornell box worse (3.2 %) in 21 s.
@@ -55,8 +56,8 @@ class SolveSettings:
     subdiv: int | None = None  # N: every surface split N x N into patches; None: split by patch_size
     patch_size: float = PATCH_SIZE  # with subdiv None: longest patch side in scene units
     elements: int = 4  # S x S elements per patch (progressive), S a power of two
-    hemicube_res: int = 64  # pixels across the hemi-cube's top face
-    hemicube_elements: int = 1  # hemi-cube method: S x S receiving elements (hemi-cubes) per patch
+    hemicube_res: int = 128  # pixels across the hemi-cube's top face (final's: 64)
+    hemicube_elements: int = 2  # hemi-cube method: S x S receiving elements (hemi-cubes) per patch (final's: 1)
     solver: str = "gauss-seidel"  # fewer sweeps than Jacobi (docs/architecture.md: measured on llvmpipe)
     tolerance: float | None = None  # None: the method's default
     max_iterations: int = 100_000  # linear solvers
