@@ -73,6 +73,9 @@ def test_a_solver_without_its_own_estimate_is_extrapolated():
         clock.fraction(now=0.1 * k)
     clock.laying_out_lightmaps(now=10.0)
     assert clock.stage == "writing lightmaps" and clock.fraction(now=10.2) > 0.9
+    # the bar says "finishing"; the stage shows that the lightmaps go on (the panel redraws on a change)
+    assert clock.stage_text(now=10.5) == "writing lightmaps"
+    assert clock.stage_text(now=12.2) == "writing lightmaps (2 s)" and clock.status_line(now=13.1).count("(3 s)") == 1
     clock.finished()
     assert clock.fraction() == 1.0 and clock.seconds_left() is None
 

@@ -46,7 +46,7 @@ def draw_progress(layout, bake) -> None:
         layout.progress(factor=clock.fraction(), text="Cancelling...")
         return
     layout.progress(factor=clock.fraction(), text=clock.bar_text())
-    layout.label(text=sentence(clock.stage), icon="TIME")
+    layout.label(text=sentence(clock.stage_text()), icon="TIME")
     layout.label(text="Esc cancels", icon="CANCEL")
 
 

@@ -45,6 +45,7 @@ class BakeClock:
         self.done = False
         self._estimated_at: float | None = None
         self._shown_at: float | None = None
+        self._lightmaps_started: float | None = None
 
     def solving(self, fraction: float, message: str, eta: float | None, now: float | None = None,
                 own_estimate: bool = False) -> None:
@@ -67,8 +68,18 @@ class BakeClock:
     def laying_out_lightmaps(self, now: float | None = None) -> None:
         now = time.monotonic() if now is None else now
         self.stage = "writing lightmaps"
+        self._lightmaps_started = now
         solve_time = now - (self.solve_started if self.solve_started is not None else self.started)
         self.total = (now - self.started) + LIGHTMAP_SHARE * solve_time  # the solve's part is known now
+
+    def stage_text(self, now: float | None = None) -> str:
+        """The stage, with the seconds the lightmaps have taken so far: their share of the time is a
+        guess (LIGHTMAP_SHARE), and a bar at "finishing" must still show that the bake goes on."""
+        if self._lightmaps_started is None or self.done:
+            return self.stage
+        now = time.monotonic() if now is None else now
+        seconds = now - self._lightmaps_started
+        return self.stage if seconds < 1.0 else f"{self.stage} ({seconds:.0f} s)"
 
     def finished(self) -> None:
         self.done = True
@@ -111,4 +122,4 @@ class BakeClock:
         return f"{100 * fraction:.0f}%" + (f" · {time_left_text(left)}" if left is not None else "")
 
     def status_line(self, now: float | None = None) -> str:
-        return f"Radiosity bake {self.bar_text(now)} · {self.stage} · Esc cancels"
+        return f"Radiosity bake {self.bar_text(now)} · {self.stage_text(now)} · Esc cancels"
