@@ -27,10 +27,10 @@ from ..gpu import GPU, open_gpu
 from ..scene import Scene
 from ..settings import LightmapSettings
 from ..solution import Solution
+from ..shooting.sky import element_frames
 from ..uvspace import rasterize
 from . import charts
 from .contact import in_contact
-from ..shooting.sky import element_frames
 from .direct import (direct_light, emitters_reflected_light, emitters_reflection, footprint_points, sharp_texels,
                      texel_axes, texel_points)
 from .lattice import continuous_lattice, element_values
@@ -157,9 +157,10 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     mapped = np.isin(patches.surface, [i for name in scene.material_maps for i in scene.object_surfaces.get(name, ())])
     # what is interpolated: the light H (less its direct part when texels get that), or B for
     # "combined" where no material map turns H into B texel by texel
-    reflected = emitters_reflection(patches, solution.patch_radiosity) if per_texel else None
+    reflected = None
     if per_texel:
         values = element_values(solution, light=True) - element_values(solution, direct=True)
+        reflected = emitters_reflection(patches, solution.patch_radiosity)
         if reflected is not None:  # the texels take it from the emitters' pieces too (`add_direct_light`)
             values = values - reflected_light_at_elements(gpu, solution, settings, reflected, values.shape[1])
     elif light or mapped.any():

@@ -121,6 +121,13 @@ def emitters_reflected_light(gpu: GPU, scene: Scene, patches: Patches, points: n
     `reflected` (P, 3), shot from their pieces as `direct_light` shoots it: the part of the
     solve's element light that the texels take from `direct_light(..., reflected)` instead."""
     shooters = emitter_shooters(scene, patches, pieces, reflected, emission=False)
+    return shot_light(gpu, scene, patches, points, owners, shooters, visibility, resolution, occlusion)
+
+
+def shot_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray, shooters: list,
+               visibility: str, resolution: int, occlusion: bool) -> np.ndarray:
+    """(N, 3) the light `shooters` send to `points` (the texel pass, `light_at_points`), in the
+    solve's visibility variant where the texel pass has it."""
     variant = visibility if visibility in VISIBILITY_VARIANTS else "hemicube"
     with gpu.resources() as res:
         return light_at_points(res, scene, patches, points, owners, shooters, variant, resolution, occlusion)
@@ -133,7 +140,5 @@ def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, o
     number of shots (emitters and area lamps in up to `pieces` x `pieces` each; the emitters
     send what they reflect of `reflected` (P, 3) too, when given)."""
     shooters = direct_shooters(scene, patches, pieces, reflected)
-    variant = visibility if visibility in VISIBILITY_VARIANTS else "hemicube"
-    with gpu.resources() as res:
-        light = light_at_points(res, scene, patches, points, owners, shooters, variant, resolution, occlusion)
+    light = shot_light(gpu, scene, patches, points, owners, shooters, visibility, resolution, occlusion)
     return light, len(shooters)

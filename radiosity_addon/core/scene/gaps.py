@@ -2,7 +2,7 @@
 millimetres under a ceiling — and where their outlines lie: light trapped in such a gap is many
 times the room's and falls off within a few gaps of the opening, so refinement (`refinement.py`)
 splits there (cutting along the outline) and progressive refinement's patches there shoot alone,
-never in a cluster (`progressive/method.py`)."""
+never in a cluster (`progressive/clusters.cluster_owners`)."""
 
 from __future__ import annotations
 
@@ -62,8 +62,17 @@ def emitter_gaps(patches: Patches) -> np.ndarray:
     """(P,) the gap across which each patch faces another surface's patch turned towards it
     (normals within OPPOSED_COSINE of opposite: not a wall meeting it at a corner) when one of
     the two emits (`facing_partners`), inf where none does."""
-    gaps, partners = facing_partners(patches, np.arange(len(patches)))
-    other = np.maximum(partners, 0)
     emits = np.any(patches.emission > 0, axis=1)
-    opposed = np.einsum("nd,nd->n", patches.normal, patches.normal[other]) < -OPPOSED_COSINE
-    return np.where((partners >= 0) & opposed & (emits | emits[other]), gaps, np.inf)
+    # only an emitter or a patch within `facing_partners`' reach of one (centres closer than twice
+    # its radius plus the emitter's) can have an emitter for a partner: search from those alone,
+    # not from every patch of the scene (0.77 s on the 4k room's 7 055 patches)
+    emitting = np.flatnonzero(emits)
+    radius = np.linalg.norm(patches.corners - patches.center[:, None], axis=2).max(axis=1)
+    near = [other for _, other in near_pairs(patches.center, 2 * radius, emitting, radius[emitting])]
+    candidates = np.unique(np.concatenate([emitting, *near]))
+    gaps = np.full(len(patches), np.inf)
+    found, partners = facing_partners(patches, candidates)
+    other = np.maximum(partners, 0)
+    opposed = np.einsum("nd,nd->n", patches.normal[candidates], patches.normal[other]) < -OPPOSED_COSINE
+    gaps[candidates] = np.where((partners >= 0) & opposed & (emits[candidates] | emits[other]), found, np.inf)
+    return gaps

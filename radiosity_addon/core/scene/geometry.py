@@ -34,11 +34,7 @@ def unit(vectors: np.ndarray) -> np.ndarray:
 
 def bilinear(corners: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
     """corners (P, 4, D); s, t arrays of one shape -> (P, *shape, D)."""
-    s = np.asarray(s, dtype=np.float64)[None, ..., None]
-    t = np.asarray(t, dtype=np.float64)[None, ..., None]
-    expand = (slice(None),) + (None,) * (s.ndim - 2)
-    c0, c1, c2, c3 = (corners[expand + (k,)] for k in range(4))
-    return c0 * (1 - s) * (1 - t) + c1 * s * (1 - t) + c2 * s * t + c3 * (1 - s) * t
+    return bilinear_each(corners, np.asarray(s)[None], np.asarray(t)[None])
 
 
 def bilinear_each(corners: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
