@@ -9,12 +9,14 @@ import re
 from dataclasses import replace
 
 import moderngl
+import numpy as np
 import pytest
 from scenes import closed_cube, surface
 
 from radiosity_addon.core import (GPU, LightmapSettings, SolveCancelled, SolveSettings, bake_lightmaps, load_scene,
                                   render_preview, scene_from_dict, solve)
 from radiosity_addon.core.gpu import bindings
+from radiosity_addon.core.gpu.resources import MAX_SPARE_BYTES
 from radiosity_addon.core.gpu.shaders import SHADERS_DIR
 
 
@@ -143,3 +145,17 @@ def test_binding_names_are_unique_per_pass_and_every_shader_name_is_defined():
     sources = " ".join(p.read_text() for p in SHADERS_DIR.rglob("*") if p.is_file())
     used = set(re.findall(r"\b((?:STORAGE|TEXTURE|IMAGE)_[A-Z_]+)\b", sources))
     assert used and used <= defined, used - defined
+
+
+def test_scratch_targets_pass_from_scope_to_scope_and_leave_results_unchanged(watched):
+    """The visibility atlases and maps a closed scope gave back are what the next solve draws
+    into (no fresh allocation), they hold stale pixels then, and the solve is the same bit for bit."""
+    scene = lit_room()
+    settings = replace(HEMICUBE, refinements=2)
+    first = solve(scene, settings, gpu=watched)
+    kept = {id(obj) for spares in watched._spares.values() for obj in spares}
+    assert kept and 0 < watched._spare_bytes <= MAX_SPARE_BYTES
+    second = solve(scene, settings, gpu=watched)
+    assert {id(obj) for spares in watched._spares.values() for obj in spares} == kept
+    np.testing.assert_array_equal(first.patch_radiosity, second.patch_radiosity)
+    assert leaked(watched) == []

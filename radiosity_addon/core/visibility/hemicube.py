@@ -142,9 +142,8 @@ class HemicubeAtlas:
             index_buffer=self.index_buffer,
             index_element_size=4,
         )
-        self.item_texture = res.texture(self.atlas_size, 1, dtype="u4")
-        self.item_texture.filter = (ctx.NEAREST, ctx.NEAREST)
-        self.depth = res.depth_renderbuffer(self.atlas_size)
+        self.item_texture = res.scratch_texture(self.atlas_size, 1, dtype="u4")  # `draw` clears it
+        self.depth = res.scratch_depth(self.atlas_size)
         self.framebuffer = res.framebuffer([self.item_texture], self.depth)
 
     def draw(self, hemicube_frames) -> None:

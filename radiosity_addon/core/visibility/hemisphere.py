@@ -78,11 +78,9 @@ class VisibilityMap:
         self.vertex_buffer = res.buffer(vertices.tobytes())
         self.vao = res.vertex_array(self.program, [(self.vertex_buffer, "3f 1u 1i", "in_position", "in_patch",
                                                     "in_twin")])
-        self.items = res.texture((resolution, resolution), 1, dtype="u4")
-        self.items.filter = (ctx.NEAREST, ctx.NEAREST)
-        self.distances = res.texture((resolution, resolution), 1, dtype="f4")
-        self.distances.filter = (ctx.NEAREST, ctx.NEAREST)
-        self.depth = res.depth_renderbuffer((resolution, resolution))
+        self.items = res.scratch_texture((resolution, resolution), 1, dtype="u4")  # `render` clears them
+        self.distances = res.scratch_texture((resolution, resolution), 1, dtype="f4")
+        self.depth = res.scratch_depth((resolution, resolution))
         self.framebuffer = res.framebuffer([self.items, self.distances], self.depth)
 
     @staticmethod
