@@ -154,7 +154,7 @@ def test_scratch_targets_pass_from_scope_to_scope_and_leave_results_unchanged(wa
     settings = replace(HEMICUBE, refinements=2)
     first = solve(scene, settings, gpu=watched)
     kept = {id(obj) for spares in watched._spares.values() for obj in spares}
-    assert kept and 0 < watched._spare_bytes <= MAX_SPARE_BYTES
+    assert kept and 0 < watched.spare_bytes <= MAX_SPARE_BYTES
     second = solve(scene, settings, gpu=watched)
     assert {id(obj) for spares in watched._spares.values() for obj in spares} == kept
     np.testing.assert_array_equal(first.patch_radiosity, second.patch_radiosity)

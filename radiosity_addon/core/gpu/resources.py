@@ -7,8 +7,8 @@ after), so several contexts in one thread — a caller's and one of its own — 
 
 Render targets a pass clears before every use (visibility atlases and maps: up to 100 MB each)
 are `scratch`: a closing scope hands them back to its GPU, and the next scope asking for the same
-size takes them instead of a fresh allocation, which llvmpipe zero-fills page by page (~0.1 s
-for a 4096 x 3072 atlas, once per probe round and per texel pass before this pool)."""
+size takes them instead of a fresh allocation, which llvmpipe zero-fills page by page (~0.14 s
+for a 4096 x 3072 atlas and its depth, once per probe round and per texel pass before this pool)."""
 
 from __future__ import annotations
 
@@ -57,7 +57,6 @@ class GPU:
         self._owns_context = ctx is None
         self._programs: dict[tuple, object] = {}
         self._spares: dict[tuple, list] = {}  # scratch targets no scope holds, by (kind, size, format)
-        self._spare_bytes = 0
         for name, source in includes().items():
             self.ctx.includes[name] = source
 
@@ -86,21 +85,22 @@ class GPU:
     def resources(self) -> "Resources":
         return Resources(self)
 
+    @property
+    def spare_bytes(self) -> int:
+        """Memory of the scratch targets kept for the next scope."""
+        return sum(scratch_bytes(key) * len(spares) for key, spares in self._spares.items())
+
     def take_spare(self, key: tuple):
         """A scratch target of `key` a closed scope gave back, or None."""
         spares = self._spares.get(key)
-        if not spares:
-            return None
-        self._spare_bytes -= scratch_bytes(key)
-        return spares.pop()
+        return spares.pop() if spares else None
 
     def give_back(self, key: tuple, obj) -> None:
         """Keep a scratch target for the next scope, or release it when the pool is full."""
-        if self._spare_bytes + scratch_bytes(key) > MAX_SPARE_BYTES:
+        if self.spare_bytes + scratch_bytes(key) > MAX_SPARE_BYTES:
             obj.release()
             return
         self._spares.setdefault(key, []).append(obj)
-        self._spare_bytes += scratch_bytes(key)
 
     def close(self) -> None:
         with active(self.ctx):
@@ -108,7 +108,6 @@ class GPU:
                 for obj in spares:
                     obj.release()
             self._spares.clear()
-            self._spare_bytes = 0
             for program in self._programs.values():
                 program.release()
             self._programs.clear()
