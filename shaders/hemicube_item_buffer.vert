@@ -2,12 +2,14 @@
 // Hemi-cube item buffer: draws every patch into one face of one hemi-cube.
 // One instance = one face of one patch's hemi-cube; its tile in the atlas is
 // kept apart from the others by clip distances, so a batch of hemi-cubes is a
-// single instanced draw.
+// single instanced draw. A flat surface of many patches is drawn once: the
+// fragment shader finds the patch under each pixel (visibility/item_geometry.py).
 
 in vec3 in_position;
 in vec3 in_normal;      // the triangle's front normal
 in uint in_patch;       // patch id (a front patch)
 in int in_twin;         // its back patch, -1 when its back is not simulated
+in int in_lookup;       // -1: the patch's own triangles; else the surface's entry in the patch tables
 
 in vec3 in_eye;         // per instance: hemi-cube centre
 in vec3 in_right;       // face axes: right, up, forward (world space)
@@ -23,6 +25,9 @@ uniform float far;
 uniform uint back_item;  // what the back of a patch writes: it hides the sky but receives nothing
 
 flat out uint item;
+flat out int lookup;
+flat out uint seen_from_front;
+out vec3 world_position;  // where the fragment lies, for the patch lookup
 out float view_depth;   // c: distance along the face's axis (linear in the triangle: interpolates exactly)
 out float gl_ClipDistance[5];
 
@@ -49,9 +54,12 @@ void main() {
     // at every distance, so `near` can be far below the 4 mm between an emitter and a ceiling
     // (a projective depth would clip them apart or lose the far walls' order).
     view_depth = c;
+    world_position = in_position;
     gl_Position = vec4(x, y, 0.0, c);
 
     // Item 0 means nothing is seen (sky); a back is its twin patch, or (single-sided) its own item.
     bool front = dot(in_eye - in_position, in_normal) > 0.0;
+    seen_from_front = front ? 1u : 0u;
+    lookup = in_lookup;
     item = front ? in_patch + 1u : (in_twin >= 0 ? uint(in_twin) + 1u : back_item);
 }

@@ -36,12 +36,19 @@ class Patches:
     split: np.ndarray  # (S, 2) int per surface: (columns along s, rows along t); triangles (n, n)
     back_of: np.ndarray | None = None  # (P,) int: the front patch a back patch mirrors, -1 for fronts
     twin: np.ndarray | None = None  # (P,) int: a front patch's back patch, -1 when its back is not simulated
+    # where each patch lies in its surface: (P, 2, 2) [(s0, t0), (s1, t1)] of a quad surface's bilinear
+    # map (NaN for a triangle's pieces), and the surfaces' corners (S, 4, 3); None when not known.
+    # Item buffers draw a surface once and find the patch under each pixel from them (visibility.item_geometry).
+    params: np.ndarray | None = None
+    surface_corners: np.ndarray | None = None
 
     def __post_init__(self):
         if self.back_of is None:
             self.back_of = np.full(len(self.corners), -1, dtype=np.int64)
         if self.twin is None:
             self.twin = np.full(len(self.corners), -1, dtype=np.int64)
+        if self.params is None:
+            self.params = np.full((len(self.corners), 2, 2), np.nan)
 
     def __len__(self) -> int:
         return len(self.corners)
@@ -136,7 +143,8 @@ def fronts_of(patches: Patches) -> Patches:
     count = patches.front_count
     return Patches(corners=patches.corners[:count], uv=patches.uv[:count], surface=patches.surface[:count],
                    reflectance=patches.reflectance[:count], emission=patches.emission[:count],
-                   is_triangle=patches.is_triangle[:count], grid=patches.grid[:count], split=patches.split)
+                   is_triangle=patches.is_triangle[:count], grid=patches.grid[:count], split=patches.split,
+                   params=patches.params[:count], surface_corners=patches.surface_corners)
 
 
 def split_patches(patches: Patches, mask: np.ndarray, backs: np.ndarray, at: np.ndarray | None = None) -> Patches:
@@ -169,9 +177,14 @@ def split_patches(patches: Patches, mask: np.ndarray, backs: np.ndarray, at: np.
     uv[places] = child_uv.reshape(-1, 4, 2)
     is_triangle = fronts.is_triangle[take].copy()
     is_triangle[places] = (fronts.is_triangle[chosen][:, None] & (rows[None] == 1)).ravel()
+    # each child's rectangle in the surface: its parent's, cut at the same parameters (corners 0 and 2)
+    low, high = fronts.params[chosen, 0][:, None, None, :], fronts.params[chosen, 1][:, None, None, :]
+    child_params = low + (high - low) * params[:, :, [0, 2]]  # (n, 4 children, 2 corners, 2)
+    patch_params = fronts.params[take].copy()
+    patch_params[places] = child_params.reshape(-1, 2, 2)
     refined = Patches(corners=corners, uv=uv, surface=fronts.surface[take], reflectance=fronts.reflectance[take],
                       emission=fronts.emission[take], is_triangle=is_triangle, grid=fronts.grid[take],
-                      split=patches.split)
+                      split=patches.split, params=patch_params, surface_corners=patches.surface_corners)
     return with_back_patches(refined, backs)
 
 
@@ -189,7 +202,8 @@ def with_back_patches(patches: Patches, backs: np.ndarray) -> Patches:
     uv = np.concatenate([patches.uv, reversed_corners(patches.uv[fronts], patches.is_triangle[fronts])])
     return Patches(corners=corners, uv=uv, surface=patches.surface[take], reflectance=patches.reflectance[take],
                    emission=patches.emission[take], is_triangle=patches.is_triangle[take], grid=patches.grid[take],
-                   split=patches.split, back_of=back_of, twin=twin)
+                   split=patches.split, back_of=back_of, twin=twin, params=patches.params[take],
+                   surface_corners=patches.surface_corners)
 
 
 def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
@@ -207,13 +221,15 @@ def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
             weights = np.concatenate([1 - params.sum(axis=2, keepdims=True), params], axis=2)  # (k, 4, 3)
             corners = np.einsum("kcw,gwd->gkcd", weights, scene.corners[members, :3])
             uv = np.einsum("kcw,gwd->gkcd", weights, scene.uv[members, :3])
+            rects = np.full((len(params), 2, 2), np.nan)  # a triangle's pieces are no rectangles
         else:
             params, row, col = quad_grid(int(columns), int(rows))
             corners = bilinear(scene.corners[members], params[..., 0], params[..., 1])
             uv = bilinear(scene.uv[members], params[..., 0], params[..., 1])
+            rects = params[:, [0, 2]]
         count = len(params)
         parts.append((np.repeat(members, count), corners.reshape(-1, 4, 3), uv.reshape(-1, 4, 2),
-                      np.tile(np.stack([row, col], axis=1), (len(members), 1))))
+                      np.tile(np.stack([row, col], axis=1), (len(members), 1)), np.tile(rects, (len(members), 1, 1))))
     surface = np.concatenate([p[0] for p in parts])
     order = np.argsort(surface, kind="stable")  # surface by surface, each in its grid order
     surface = surface[order]
@@ -226,5 +242,7 @@ def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
         is_triangle=scene.is_triangle[surface],
         grid=np.concatenate([p[3] for p in parts])[order].astype(np.int32),
         split=split,
+        params=np.concatenate([p[4] for p in parts])[order],
+        surface_corners=np.asarray(scene.corners, dtype=np.float64),
     )
     return patches if backs is None else with_back_patches(patches, backs)

@@ -16,6 +16,7 @@ import numpy as np
 from ..gpu import FORM_FACTOR_ONE, Resources, storage, texture_unit, work_groups
 from ..scene import Patches
 from ..scene.geometry import tangent_frames
+from .item_geometry import VERTEX_FORMAT, item_geometry
 
 ATLAS_LIMIT = 4096  # atlas side in pixels (llvmpipe allows 16384; 4096 keeps memory modest)
 NO_PATCH = 0
@@ -82,24 +83,10 @@ def face_instances(hemicube_frames, resolution: int, tiles_per_row: int, atlas_s
     return np.stack(rows, axis=1).reshape(count * 5, -1).astype(np.float32)
 
 
-def scene_geometry(patches: Patches) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex rows (position, normal, patch id, twin id) and triangle indices of the front patches:
-    a back patch is drawn as its front seen from behind (the twin id), so coincident sides never
-    fight over depth."""
-    count = patches.front_count
-    normal = np.repeat(patches.normal[:count], 4, axis=0).astype(np.float32)
-    position = patches.corners[:count].reshape(-1, 3).astype(np.float32)
-    vertices = np.empty(count * 4, dtype=[("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4")])
-    vertices["p"], vertices["n"] = position, normal
-    vertices["id"] = np.repeat(np.arange(count, dtype=np.uint32), 4)
-    vertices["twin"] = np.repeat(patches.twin[:count].astype(np.int32), 4)
-    base = (np.arange(count) * 4)[:, None]
-    quads = base + np.array([0, 1, 2, 0, 2, 3])
-    triangles = base + np.array([0, 1, 2, 0, 1, 2])  # the degenerate half is dropped below
-    indices = np.where(patches.is_triangle[:count, None], triangles, quads)
-    keep = np.ones_like(indices, dtype=bool)
-    keep[patches.is_triangle[:count], 3:] = False
-    return vertices, indices[keep].astype(np.uint32)
+def _nonempty(array: np.ndarray) -> bytes:
+    """A buffer's bytes, at least one word (GL buffers cannot be empty)."""
+    data = np.ascontiguousarray(array).tobytes()
+    return data if data else bytes(4)
 
 
 NEAR = 1e-7  # of the scene's diameter: nearer than that a hemi-cube sees nothing (depth is logarithmic)
@@ -128,14 +115,22 @@ class HemicubeAtlas:
 
         self.program = res.gpu.program("hemicube_item_buffer.vert", "hemicube_item_buffer.frag")
         self.uniforms = {"near": NEAR * scene_diameter, "far": 4.0 * scene_diameter, "back_item": self.row_length}
-        vertices, indices = scene_geometry(patches)
-        self.vertex_buffer = res.buffer(vertices.tobytes())
-        self.index_buffer = res.buffer(indices.tobytes())
+        geometry = item_geometry(patches, face_pixels=resolution * resolution * 3 // 5)
+        self.looked_up_surfaces = geometry.looked_up
+        self.vertex_buffer = res.buffer(geometry.vertices.tobytes())
+        self.index_buffer = res.buffer(geometry.indices.tobytes())
+        self.lookup_buffers = {
+            "LOOKUP_SURFACES": res.buffer(_nonempty(geometry.surfaces)),
+            "LOOKUP_CUTS": res.buffer(_nonempty(geometry.cuts)),
+            "LOOKUP_TABLE": res.buffer(_nonempty(np.concatenate(
+                [geometry.table_offsets + np.uint32(len(geometry.table_offsets)), geometry.table]))),
+            "LOOKUP_TWINS": res.buffer(_nonempty(geometry.twins)),
+        }
         self.instance_buffer = res.buffer(reserve=self.slots * 5 * 17 * 4)
         self.vao = res.vertex_array(
             self.program,
             [
-                (self.vertex_buffer, "3f 3f 1u 1i", "in_position", "in_normal", "in_patch", "in_twin"),
+                (self.vertex_buffer, VERTEX_FORMAT, "in_position", "in_normal", "in_patch", "in_twin", "in_lookup"),
                 (self.instance_buffer, "3f 3f 3f 3f 4f 1f/i",
                  "in_eye", "in_right", "in_up", "in_forward", "in_tile", "in_up_min"),
             ],
@@ -154,6 +149,8 @@ class HemicubeAtlas:
         self.instance_buffer.write(instances.tobytes())
         for name, value in self.uniforms.items():
             self.program[name] = value
+        for name, buffer in self.lookup_buffers.items():
+            buffer.bind_to_storage_buffer(storage(name))
         self.framebuffer.use()
         self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
         ctx.enable_only(ctx.DEPTH_TEST)
