@@ -2,14 +2,18 @@
 // Hemi-cube item buffer: draws every patch into one face of one hemi-cube.
 // One instance = one face of one patch's hemi-cube; its tile in the atlas is
 // kept apart from the others by clip distances, so a batch of hemi-cubes is a
-// single instanced draw. A flat surface of many patches is drawn once: the
-// fragment shader finds the patch under each pixel (visibility/item_geometry.py).
+// single instanced draw. A parallelogram of many patches is drawn once: the
+// fragment shader finds the patch under each pixel (visibility/item_geometry.py;
+// LOOKUP 0 compiles a variant without it, for atlases that draw every patch).
 
 in vec3 in_position;
 in vec3 in_normal;      // the triangle's front normal
 in uint in_patch;       // patch id (a front patch)
 in int in_twin;         // its back patch, -1 when its back is not simulated
+#if LOOKUP
 in int in_lookup;       // -1: the patch's own triangles; else the surface's entry in the patch tables
+in vec2 in_st;          // the surface's bilinear parameters at this corner (looked-up surfaces)
+#endif
 
 in vec3 in_eye;         // per instance: hemi-cube centre
 in vec3 in_right;       // face axes: right, up, forward (world space)
@@ -25,9 +29,11 @@ uniform float far;
 uniform uint back_item;  // what the back of a patch writes: it hides the sky but receives nothing
 
 flat out uint item;
+#if LOOKUP
 flat out int lookup;
 flat out uint seen_from_front;
-out vec3 world_position;  // where the fragment lies, for the patch lookup
+out vec2 surface_st;    // affine on a parallelogram: interpolated exactly
+#endif
 out float view_depth;   // c: distance along the face's axis (linear in the triangle: interpolates exactly)
 out float gl_ClipDistance[5];
 
@@ -54,12 +60,14 @@ void main() {
     // at every distance, so `near` can be far below the 4 mm between an emitter and a ceiling
     // (a projective depth would clip them apart or lose the far walls' order).
     view_depth = c;
-    world_position = in_position;
     gl_Position = vec4(x, y, 0.0, c);
 
     // Item 0 means nothing is seen (sky); a back is its twin patch, or (single-sided) its own item.
     bool front = dot(in_eye - in_position, in_normal) > 0.0;
+#if LOOKUP
     seen_from_front = front ? 1u : 0u;
     lookup = in_lookup;
+    surface_st = in_st;
+#endif
     item = front ? in_patch + 1u : (in_twin >= 0 ? uint(in_twin) + 1u : back_item);
 }

@@ -13,7 +13,7 @@ from radiosity_addon.core.visibility import hemicube, item_geometry as items
 
 
 def cut_room():
-    """A room of quad walls, a trapezoid, a two-sided panel and a triangle, split by size and then cut
+    """A room of rectangular walls, a trapezoid, a two-sided panel and a triangle, split by size and then cut
     off-centre twice (as refinement's outline cuts do), so the patches' rectangles do not line up."""
     walls = [surface(f"wall{k}", face[::-1], 0.5, 1.0 if k == 0 else 0.0) for k, face in enumerate(box_faces((0, 0, 0), (4, 3, 2.5)))]
     extra = [surface("trapezoid", [[0.5, 0.5, 0.3], [3.0, 0.5, 0.3], [2.5, 2.0, 0.3], [1.0, 2.0, 0.3]], 0.5, 0.0),
@@ -31,21 +31,32 @@ def cut_room():
 
 
 def emulated_lookup(geometry: items.ItemGeometry, look: int, st: np.ndarray) -> np.ndarray:
-    """The fragment shader's table lookup, in numpy, at parameters st (n, 2) of looked-up surface `look`."""
-    record = geometry.surfaces[look]
-    first_s, count_s, first_t, count_t = record[5].view(np.uint32)
-    s_cuts = geometry.cuts[first_s:first_s + count_s]
-    t_cuts = geometry.cuts[first_t:first_t + count_t]
-    i = np.clip(np.searchsorted(s_cuts, st[:, 0], side="right") - 1, 0, count_s - 2)
-    j = np.clip(np.searchsorted(t_cuts, st[:, 1], side="right") - 1, 0, count_t - 2)
-    return geometry.table[geometry.table_offsets[look] + j * (count_s - 1) + i]
+    """The fragment shader's table lookup, in numpy, at parameters st (n, 2) of looked-up surface `look`:
+    each parameter's uniform bin gives the cut at or below it, or the one before the next."""
+    cuts, bins, (table_offset, *_) = geometry.surfaces[look]
+    cells = []
+    for axis in (0, 1):
+        first, count, first_bin, bin_count = cuts[2 * axis], cuts[2 * axis + 1], bins[2 * axis], bins[2 * axis + 1]
+        x = st[:, axis].astype(np.float32)
+        b = np.clip((x * bin_count).astype(np.int64), 0, bin_count - 1)
+        i = geometry.bins[first_bin + b].astype(np.int64)
+        step = (i + 2 < count) & (geometry.cuts[first + np.minimum(i + 1, count - 1)] <= x)
+        found = i + step
+        values = geometry.cuts[first:first + count]
+        assert (found == np.clip(np.searchsorted(values, x, side="right") - 1, 0, count - 2)).all()  # = a search
+        cells.append(found)
+    i, j = cells
+    return geometry.table[table_offset + j * (cuts[1] - 1) + i]
 
 
 def test_every_patch_centre_is_found_in_its_surfaces_table():
     scene, patches = cut_room()
     geometry = items.item_geometry(patches)
     looked_up = items._lookup_surfaces(patches)["surfaces"]
-    assert geometry.looked_up == len(looked_up) >= 7  # the walls, the trapezoid and the panel, not the triangle
+    # the walls and the panel, but not the trapezoid or the triangle, nor a surface whose random cuts
+    # come closer than 1 / MAX_BINS
+    assert geometry.looked_up == len(looked_up) >= 5
+    assert not np.isin([len(scene) - 3, len(scene) - 1], looked_up).any()
     assert scene.is_triangle[looked_up].sum() == 0
     fronts = np.arange(patches.front_count)
     for look, surface_index in enumerate(looked_up):
@@ -81,24 +92,23 @@ def test_looked_up_item_buffers_show_the_patches_drawn_one_by_one(gpu, monkeypat
             assert (atlas.looked_up_surfaces > 0) == (face_pixels is None)
             atlas.draw(frames)
             drawn[face_pixels] = np.frombuffer(atlas.item_texture.read(), dtype=np.uint32)
-    one_by_one, looked_up = drawn[0], drawn[None]
-    seen = one_by_one > 0
-    assert seen.mean() > 0.5 and np.unique(one_by_one).size > 100
+    one_by_one, looked_up = drawn[0].reshape(atlas.atlas_size[1], -1), drawn[None].reshape(atlas.atlas_size[1], -1)
+    assert (one_by_one > 0).mean() > 0.5 and np.unique(one_by_one).size > 100
     differ = one_by_one != looked_up
     assert differ.mean() < 2e-3, f"{differ.sum()} of {differ.size} pixels differ"
-    # where they differ, the pixel lies on an edge: both show a patch of the same surface and side, or
-    # (rarely) the patches' own triangles leave a crack at a T-junction of off-centre cuts, which the
-    # surface drawn whole does not
-    ids = lambda item: item.astype(np.int64) - 1  # noqa: E731
-    a, b = ids(one_by_one[differ]), ids(looked_up[differ])
-    print(f"{differ.sum()} differ: {(a < 0).sum()} cracks, {(b < 0).sum()} the other way")
-    assert (b >= 0).all() and (a < 0).sum() <= differ.sum() // 4
-    patch = (a >= 0) & (a < len(patches)) & (b < len(patches))  # not a single-sided back (`back_item`)
-    assert patch.mean() > 0.5
-    a, b = a[patch], b[patch]
-    # the two patches touch, nearly always (an edge inside a surface, or where two walls meet; the rest
-    # are depth ties along an edge seen edge-on)
+    # where they differ, an edge moved by a pixel (ties along shared edges and outlines, T-junction cracks):
+    # what one drawing shows there, the other shows right beside it
+    def beside(image: np.ndarray, shown: np.ndarray) -> np.ndarray:
+        padded = np.pad(image, 1)
+        y, x = np.nonzero(differ)
+        return np.any([padded[y + 1 + dy, x + 1 + dx] == shown
+                       for dy in (-1, 0, 1) for dx in (-1, 0, 1)], axis=0)
+    found = beside(one_by_one, looked_up[differ]) | beside(looked_up, one_by_one[differ])
+    # or (patches smaller than a pixel) two patches of one surface that touch each other
+    a, b = one_by_one[differ].astype(np.int64) - 1, looked_up[differ].astype(np.int64) - 1
+    both = (a >= 0) & (b >= 0) & (a < len(patches)) & (b < len(patches))
+    a, b = np.where(both, a, 0), np.where(both, b, 0)
     low, high = patches.corners.min(axis=1) - 1e-6, patches.corners.max(axis=1) + 1e-6
-    touching = (low[a] <= high[b]).all(axis=1) & (low[b] <= high[a]).all(axis=1)
-    print(f"{touching.mean():.3f} touch, {(patches.surface[a] == patches.surface[b]).mean():.3f} on one surface")
-    assert touching.mean() > 0.9 and (patches.surface[a] == patches.surface[b]).mean() > 0.5
+    neighbours = both & (patches.surface[a] == patches.surface[b]) & (low[a] <= high[b]).all(axis=1) & (
+        low[b] <= high[a]).all(axis=1)
+    assert (found | neighbours).all(), f"{(~(found | neighbours)).sum()} pixels show a patch nowhere near the other's"

@@ -16,7 +16,7 @@ import numpy as np
 from ..gpu import FORM_FACTOR_ONE, Resources, storage, texture_unit, work_groups
 from ..scene import Patches
 from ..scene.geometry import tangent_frames
-from .item_geometry import VERTEX_FORMAT, item_geometry
+from .item_geometry import VERTEX_FORMAT, VERTEX_FORMAT_WITHOUT_LOOKUP, item_geometry
 
 ATLAS_LIMIT = 4096  # atlas side in pixels (llvmpipe allows 16384; 4096 keeps memory modest)
 NO_PATCH = 0
@@ -83,12 +83,6 @@ def face_instances(hemicube_frames, resolution: int, tiles_per_row: int, atlas_s
     return np.stack(rows, axis=1).reshape(count * 5, -1).astype(np.float32)
 
 
-def _nonempty(array: np.ndarray) -> bytes:
-    """A buffer's bytes, at least one word (GL buffers cannot be empty)."""
-    data = np.ascontiguousarray(array).tobytes()
-    return data if data else bytes(4)
-
-
 NEAR = 1e-7  # of the scene's diameter: nearer than that a hemi-cube sees nothing (depth is logarithmic)
 
 
@@ -113,24 +107,29 @@ class HemicubeAtlas:
         self.atlas_size = (self.tiles_per_row * resolution, tile_rows * 3 * resolution)
         self.row_length = self.patch_count + 1  # the last column: backs of patches
 
-        self.program = res.gpu.program("hemicube_item_buffer.vert", "hemicube_item_buffer.frag")
-        self.uniforms = {"near": NEAR * scene_diameter, "far": 4.0 * scene_diameter, "back_item": self.row_length}
         geometry = item_geometry(patches, face_pixels=resolution * resolution * 3 // 5)
         self.looked_up_surfaces = geometry.looked_up
+        looked_up = geometry.looked_up > 0  # else a shader without the lookup (its varyings cost fill)
+        self.program = res.gpu.program("hemicube_item_buffer.vert", "hemicube_item_buffer.frag",
+                                       defines={"LOOKUP": int(looked_up)})
+        self.uniforms = {"near": NEAR * scene_diameter, "far": 4.0 * scene_diameter, "back_item": self.row_length}
         self.vertex_buffer = res.buffer(geometry.vertices.tobytes())
         self.index_buffer = res.buffer(geometry.indices.tobytes())
         self.lookup_buffers = {
-            "LOOKUP_SURFACES": res.buffer(_nonempty(geometry.surfaces)),
-            "LOOKUP_CUTS": res.buffer(_nonempty(geometry.cuts)),
-            "LOOKUP_TABLE": res.buffer(_nonempty(np.concatenate(
-                [geometry.table_offsets + np.uint32(len(geometry.table_offsets)), geometry.table]))),
-            "LOOKUP_TWINS": res.buffer(_nonempty(geometry.twins)),
-        }
+            "LOOKUP_SURFACES": res.buffer(geometry.surfaces.tobytes()),
+            "LOOKUP_CUTS": res.buffer(geometry.cuts.tobytes()),
+            "LOOKUP_BINS": res.buffer(geometry.bins.tobytes()),
+            "LOOKUP_TABLE": res.buffer(geometry.table.tobytes()),
+            "LOOKUP_TWINS": res.buffer(geometry.twins.tobytes()),
+        } if looked_up else {}
+        vertex_format, attributes = VERTEX_FORMAT, ["in_position", "in_normal", "in_patch", "in_twin", "in_lookup", "in_st"]
+        if not looked_up:
+            vertex_format, attributes = VERTEX_FORMAT_WITHOUT_LOOKUP, attributes[:4]
         self.instance_buffer = res.buffer(reserve=self.slots * 5 * 17 * 4)
         self.vao = res.vertex_array(
             self.program,
             [
-                (self.vertex_buffer, VERTEX_FORMAT, "in_position", "in_normal", "in_patch", "in_twin", "in_lookup"),
+                (self.vertex_buffer, vertex_format, *attributes),
                 (self.instance_buffer, "3f 3f 3f 3f 4f 1f/i",
                  "in_eye", "in_right", "in_up", "in_forward", "in_tile", "in_up_min"),
             ],

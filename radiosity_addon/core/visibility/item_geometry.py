@@ -1,15 +1,16 @@
 """What item buffers draw: the scene's geometry, each primitive telling which patch it shows.
 
 A hemi-cube batch draws the whole scene once per face of every hemi-cube, so its cost grows with
-the triangles drawn (on llvmpipe, measured: time in proportion to them). A flat quad surface split
-into many patches (a wall, a floor, refined near an emitter) is therefore drawn once, as its own
-two triangles, and the fragment shader finds the patch under each pixel: the point's bilinear
-parameters (s, t) in the surface, then the patch whose rectangle holds them in a table over the
-surface's distinct cut parameters (every patch of a quad surface is a rectangle of its parameter
-domain: the grid of `subdivide`, cut again by `split_patches`). The same pixel centre gets the same
-patch as drawing the patches' own triangles would, up to rounding at their shared edges.
+the triangles drawn (on llvmpipe, measured: time in proportion to them). A parallelogram surface
+split into many patches (a wall, a floor, refined near an emitter) is therefore drawn once, as its
+own two triangles carrying its bilinear parameters (s, t) — affine on a parallelogram, so
+interpolation gives them exactly — and the fragment shader finds the patch whose rectangle holds
+them in a table over the surface's distinct cut parameters (every patch of a quad surface is a
+rectangle of its parameter domain: the grid of `subdivide`, cut again by `split_patches`). The same
+pixel centre gets the same patch as drawing the patches' own triangles would, up to rounding at
+their shared edges.
 
-Everything else (triangles' pieces, curved quads, surfaces of one patch, patches without their
+Everything else (triangles' pieces, other quads, surfaces of one patch, patches without their
 rectangle) is drawn patch by patch.
 """
 
@@ -24,31 +25,35 @@ from ..scene.geometry import area_vector, bilinear_each
 
 DIRECT = -1  # a vertex's `lookup` when it belongs to a patch drawn by its own triangles
 NO_PATCH = 0xFFFFFFFF  # a table cell no patch covers (nothing is drawn there)
-PLANAR = 1e-6  # of a surface's size: farther from its plane a corner makes it curved (drawn patch by patch)
+PARALLELOGRAM = 1e-6  # of a surface's size: c0 + c2 - c1 - c3 longer than this and it is no parallelogram
 CUT_QUANTUM = 2.0 ** -40  # cut parameters this close are one cut (one patch's edge seen from both sides)
+MAX_BINS = 4096  # uniform bins along one side of a surface, each holding at most one cut (else patch by patch)
 TABLE_CELLS_PER_PATCH = 16  # a surface whose cut table would hold more cells than this per patch is drawn
 # patch by patch (cuts that do not line up across it make the table grow as their product)
 
-# Looked up only where the triangles saved per face outnumber the face's pixels (the lookup runs for
+# Looked up only where the triangles saved per face reach half the face's pixels (the lookup runs for
 # every fragment, overdrawn ones too). Measured on llvmpipe (docs/architecture.md): the Cornell box's
-# `final` form factors (64 px, 1.07 saved per pixel) 1.73 -> 1.20 s and a 4k room's hemi-cube
-# `final` (2.3) 27.5 -> 20.9 s gain; the room's 128-px `good` shooter maps (~0.6) and 256-px
-# probes lose (11.8 -> 13.5 s, 0.05 -> 0.08 s a batch), so they stay patch by patch.
-LOOKUP_PIXELS_PER_TRIANGLE = 1.0
+# `final` form factors (64 px, 0.61 saved per pixel) and a 4k room's hemi-cube `final` gain; the
+# room's 128-px `good` shooter maps (0.28) come out even, 256-px probes (< 0.05) lose.
+LOOKUP_PIXELS_PER_TRIANGLE = 0.5
 
-VERTEX_FORMAT = "3f 3f 1u 1i 1i"  # position, normal, patch, twin, lookup
-VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("lookup", "i4")]
+RECORD = 3  # uvec4s per looked-up surface (hemicube_item_buffer.frag)
+VERTEX_FORMAT = "3f 3f 1u 1i 1i 2f"  # position, normal, patch, twin, lookup, (s, t)
+VERTEX_FORMAT_WITHOUT_LOOKUP = "3f 3f 1u 1i 12x"  # the same rows for a shader without the lookup
+VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("lookup", "i4"), ("st", "f4", 2)]
 
 
 @dataclass
 class ItemGeometry:
     vertices: np.ndarray  # VERTEX_DTYPE rows
     indices: np.ndarray  # (3 T,) uint32 triangles
-    surfaces: np.ndarray  # (L, 6, 4) float32 per looked-up surface: origin, axis s, axis t (scaled to its
-    # size), corners 1-3 in that frame (x, y, 0, 0), then (cuts s offset, count, cuts t offset, count) as uint
+    surfaces: np.ndarray  # (L, RECORD, 4) uint32 per looked-up surface: (cuts s offset, count, cuts t offset,
+    # count), (bins s offset, count, bins t offset, count), (table offset, 0, 0, 0)
     cuts: np.ndarray  # float32 cut parameters, each surface's s then t, ascending from 0 to 1
+    bins: np.ndarray  # uint32 per surface and side, N uniform bins (N a power of two): the last cut at or
+    # below each bin's start, so a parameter's cell is that one or the next (a binary search made the
+    # lookup cost more than the triangles it saved)
     table: np.ndarray  # uint32 front patch ids, per surface (ns - 1) x (nt - 1) cells, row-major in t
-    table_offsets: np.ndarray  # (L,) uint32 where each surface's table starts
     twins: np.ndarray  # (fronts,) int32 each front's back patch, -1 when its back is not simulated
 
     @property
@@ -72,12 +77,12 @@ def item_geometry(patches: Patches, face_pixels: int | None = None) -> ItemGeome
     vertices, indices = _patch_geometry(patches, np.flatnonzero(direct))
     twins = patches.twin[:count].astype(np.int32)
     if lookup is None:
-        empty = np.zeros((0, 6, 4), dtype=np.float32)
+        empty = np.zeros((0, RECORD, 4), dtype=np.uint32)
         return ItemGeometry(vertices, indices, empty, np.zeros(1, np.float32), np.zeros(1, np.uint32),
-                            np.zeros(0, np.uint32), twins)
+                            np.zeros(1, np.uint32), twins)
     quads, quad_indices = _surface_geometry(patches.surface_corners[lookup["surfaces"]], len(vertices))
     return ItemGeometry(np.concatenate([vertices, quads]), np.concatenate([indices, quad_indices]),
-                        lookup["records"], lookup["cuts"], lookup["table"], lookup["table_offsets"], twins)
+                        lookup["records"], lookup["cuts"], lookup["bins"], lookup["table"], twins)
 
 
 def _patch_geometry(patches: Patches, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -90,6 +95,7 @@ def _patch_geometry(patches: Patches, rows: np.ndarray) -> tuple[np.ndarray, np.
     vertices["id"] = np.repeat(rows.astype(np.uint32), 4)
     vertices["twin"] = np.repeat(patches.twin[rows].astype(np.int32), 4)
     vertices["lookup"] = DIRECT
+    vertices["st"] = 0.0
     base = (np.arange(count) * 4)[:, None]
     is_triangle = patches.is_triangle[rows]
     indices = np.where(is_triangle[:, None], base + np.array([0, 1, 2, 0, 1, 2]), base + np.array([0, 1, 2, 0, 2, 3]))
@@ -107,6 +113,7 @@ def _surface_geometry(corners: np.ndarray, first_vertex: int) -> tuple[np.ndarra
     vertices["id"] = 0
     vertices["twin"] = -1
     vertices["lookup"] = np.repeat(np.arange(count, dtype=np.int32), 4)
+    vertices["st"] = np.tile([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], (count, 1))
     base = first_vertex + (np.arange(count) * 4)[:, None]
     return vertices, (base + np.array([0, 1, 2, 0, 2, 3])).ravel().astype(np.uint32)
 
@@ -123,7 +130,7 @@ def _lookup_surfaces(patches: Patches) -> dict | None:
     per_surface = np.bincount(surface, minlength=surfaces)
     known = np.isfinite(params).all(axis=(1, 2))
     candidate = (per_surface >= 2) & (np.bincount(surface, weights=~known, minlength=surfaces) == 0)
-    candidate &= _planar(corners)
+    candidate &= _parallelogram(corners)
     # the patches must be where their rectangles say (the bilinear map of the surface at their corners)
     mine = candidate[surface]
     rect_corners = _rectangle_corners(params[mine])
@@ -157,7 +164,8 @@ def _lookup_surfaces(patches: Patches) -> dict | None:
     flat = table_start[place[which]] + cell
     # every cell under one patch at most (else the rectangles overlap: the surface is drawn patch by patch)
     hits = np.bincount(flat, minlength=int(cells.sum()))
-    fits = np.ones(len(listed), dtype=bool)
+    s_bins, t_bins = _bin_counts(s_cuts), _bin_counts(t_cuts)
+    fits = (s_bins <= MAX_BINS) & (t_bins <= MAX_BINS)
     fits[np.unique(place[which][hits[flat] > 1])] = False
     if not fits.any():
         return None
@@ -166,8 +174,42 @@ def _lookup_surfaces(patches: Patches) -> dict | None:
     table = table[np.repeat(fits, cells)]
     table_offsets = np.concatenate([[0], np.cumsum(cells[fits])[:-1]]).astype(np.uint32)
     cuts, offsets = _interleaved_cuts(s_cuts, t_cuts, fits)
-    return {"surfaces": listed[fits], "records": _records(corners[listed[fits]], offsets), "cuts": cuts,
-            "table": table, "table_offsets": table_offsets}
+    bins, bin_offsets = _bins(s_cuts, t_cuts, s_bins, t_bins, fits)
+    records = np.zeros((int(fits.sum()), RECORD, 4), dtype=np.uint32)
+    records[:, 0], records[:, 1], records[:, 2, 0] = offsets, bin_offsets, table_offsets
+    return {"surfaces": listed[fits], "records": records, "cuts": cuts, "bins": bins, "table": table}
+
+
+def _bin_counts(cuts: dict) -> np.ndarray:
+    """Per surface, the fewest uniform bins (a power of two) narrower than its closest two cuts, so no
+    bin holds two cuts inside it."""
+    gaps = np.diff(cuts["values"])
+    gaps[np.diff(cuts["keys"] >> 42) != 0] = np.inf  # between two surfaces' cuts
+    closest = np.minimum.reduceat(np.append(gaps, np.inf), cuts["offset"])
+    return 2 ** np.ceil(np.log2(1 / np.maximum(closest, CUT_QUANTUM))).astype(np.int64)
+
+
+def _bins(s_cuts: dict, t_cuts: dict, s_bins: np.ndarray, t_bins: np.ndarray, keep: np.ndarray):
+    """The kept surfaces' bins, s then t, one surface after another (uint32: the last cut at or below each
+    bin's start, counted in the surface's cuts), and per surface (s offset, count, t offset, count)."""
+    parts = []
+    for cuts, bins in ((s_cuts, s_bins[keep]), (t_cuts, t_bins[keep])):
+        surfaces = cuts["surfaces"][keep]
+        owner = np.repeat(np.arange(len(bins)), bins)
+        index = np.arange(int(bins.sum())) - np.repeat(np.cumsum(bins) - bins, bins)
+        start = index * ((1 << 40) // bins[owner])  # each bin's start, quantized like the cuts
+        found = np.searchsorted(cuts["keys"], (surfaces[owner] << 42) | start, side="right") - 1
+        parts.append((found - cuts["offset"][keep][owner], bins))
+    (s_found, s_count), (t_found, t_count) = parts
+    lengths = s_count + t_count
+    start = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    values = np.empty(int(lengths.sum()), dtype=np.uint32)
+    in_s = np.repeat(np.arange(len(lengths)), s_count)
+    in_t = np.repeat(np.arange(len(lengths)), t_count)
+    values[start[in_s] + np.arange(len(in_s)) - np.repeat(np.cumsum(s_count) - s_count, s_count)] = s_found
+    values[start[in_t] + s_count[in_t] + np.arange(len(in_t)) - np.repeat(np.cumsum(t_count) - t_count, t_count)] = t_found
+    offsets = np.stack([start, s_count, start + s_count, t_count], axis=1).astype(np.uint32)
+    return values, offsets
 
 
 def _interleaved_cuts(s_cuts: dict, t_cuts: dict, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -187,14 +229,11 @@ def _interleaved_cuts(s_cuts: dict, t_cuts: dict, keep: np.ndarray) -> tuple[np.
     return values.astype(np.float32), offsets
 
 
-def _planar(corners: np.ndarray) -> np.ndarray:
-    area = area_vector(corners)
-    length = np.linalg.norm(area, axis=1)
-    normal = area / np.maximum(length, 1e-300)[:, None]
+def _parallelogram(corners: np.ndarray) -> np.ndarray:
+    """(S,) bool: the quad is a parallelogram (so flat, and its bilinear map affine)."""
     size = np.linalg.norm(corners[:, 2] - corners[:, 0], axis=1)
-    off_plane = np.abs(np.einsum("sd,sd->s", corners[:, 3] - corners[:, 0], normal))
-    off_plane = np.maximum(off_plane, np.abs(np.einsum("sd,sd->s", corners[:, 1] - corners[:, 0], normal)))
-    return (length > 0) & (off_plane <= PLANAR * size)
+    skew = np.linalg.norm(corners[:, 0] + corners[:, 2] - corners[:, 1] - corners[:, 3], axis=1)
+    return (np.linalg.norm(area_vector(corners), axis=1) > 0) & (skew <= PARALLELOGRAM * size)
 
 
 def _rectangle_corners(params: np.ndarray) -> np.ndarray:
@@ -212,7 +251,7 @@ def _cuts(owner: np.ndarray, ends: np.ndarray) -> tuple[dict, np.ndarray]:
     surfaces, first, counts = np.unique(unique >> 42, return_index=True, return_counts=True)
     index = inverse.reshape(-1, 2) - first[np.searchsorted(surfaces, owner)][:, None]
     values = (unique & ((1 << 42) - 1)).astype(np.float64) * CUT_QUANTUM
-    return {"surfaces": surfaces, "offset": first, "count": counts, "values": values}, index
+    return {"surfaces": surfaces, "offset": first, "count": counts, "values": values, "keys": unique}, index
 
 
 def _cells(s_index: np.ndarray, t_index: np.ndarray, columns: np.ndarray):
@@ -225,27 +264,3 @@ def _cells(s_index: np.ndarray, t_index: np.ndarray, columns: np.ndarray):
     i = s_index[which, 0] + k % np.maximum(width[which], 1)
     j = t_index[which, 0] + k // np.maximum(width[which], 1)
     return j * columns[which] + i, which
-
-
-def _records(corners: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """(L, 6, 4) float32: origin, s axis, t axis of each surface's plane frame scaled by 1/size (so the
-    inverse bilinear map works at unit scale), its corners 1-3 in that frame, and its cut offsets."""
-    origin = corners[:, 0]
-    size = np.maximum(np.linalg.norm(corners[:, 2] - corners[:, 0], axis=1),
-                      np.linalg.norm(corners[:, 3] - corners[:, 1], axis=1))
-    area = area_vector(corners)
-    normal = area / np.linalg.norm(area, axis=1, keepdims=True)
-    axis_s = corners[:, 1] - origin
-    axis_s /= np.linalg.norm(axis_s, axis=1, keepdims=True)
-    axis_t = np.cross(normal, axis_s)
-    axis_s, axis_t = axis_s / size[:, None], axis_t / size[:, None]
-    relative = corners - origin[:, None]
-    flat = np.stack([np.einsum("skd,sd->sk", relative, axis_s), np.einsum("skd,sd->sk", relative, axis_t)], axis=2)
-    records = np.zeros((len(corners), 6, 4), dtype=np.float32)
-    records[:, 0, :3] = origin
-    records[:, 1, :3] = axis_s
-    records[:, 2, :3] = axis_t
-    records[:, 3] = flat[:, 1:3].reshape(-1, 4)  # corners 1, 2
-    records[:, 4, :2] = flat[:, 3]  # corner 3
-    records[:, 5] = offsets.view(np.float32)
-    return records
