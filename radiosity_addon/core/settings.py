@@ -37,10 +37,13 @@ QUALITY_PRESETS = {
                        "probe_pieces": 4},
              "tolerance": {"progressive": 2e-2, "hemicube": 1e-5},
              "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 4, "direct_subsamples": 2}},
+    # final's probe and texel pass take emitters in 4 x 4 pieces, as good's do: 8 x 8 gave the same error on
+    # the 4k room (4.6 %) and the Cornell box (2.2 %) for 20 % more time on the room (README)
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
-                        "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0},
+                        "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0,
+                        "probe_pieces": 4},
               "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
-              "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 8, "direct_subsamples": 4}},
+              "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 4, "direct_subsamples": 4}},
 }
 DEFAULT_TOLERANCE = QUALITY_PRESETS["final"]["tolerance"]
 
