@@ -21,7 +21,7 @@ layout(std430, binding = STORAGE_LOOKUP_TABLE) readonly buffer Table { uint tabl
 layout(std430, binding = STORAGE_LOOKUP_TWINS) readonly buffer Twins { int twin[]; };
 
 const int RECORD = 3;  // uvec4s per surface
-const uint NO_PATCH = 0xFFFFFFFFu;
+const uint EMPTY_CELL = 0xFFFFFFFFu;
 
 // index i of the cell [cut[first + i], cut[first + i + 1]) holding x: the cut at or below the start of
 // x's uniform bin, or the next one (a bin holds at most one cut inside it)
@@ -43,7 +43,7 @@ void main() {
         uint i = cell_of(surface_st.x, cuts.x, cuts.y, bins.x, bins.y);
         uint j = cell_of(surface_st.y, cuts.z, cuts.w, bins.z, bins.w);
         uint patch_id = table[surface_record[lookup * RECORD + 2].x + j * (cuts.y - 1u) + i];
-        if (patch_id == NO_PATCH) discard;
+        if (patch_id == EMPTY_CELL) discard;
         out_item = seen_from_front != 0u ? patch_id + 1u
                  : (twin[patch_id] >= 0 ? uint(twin[patch_id]) + 1u : back_item);
     }

@@ -18,7 +18,7 @@ QUALITIES = ("draft", "good", "final")
 # what each quality sets (the dataclass defaults below are "final"'s but for the hemi-cubes, the
 # finer ones the analytic tests are written for); the bench measures what each
 # costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft 7.4 % in ~12 s,
-# good 6.0 % in ~18 s, final 4.6 % in ~127 s; on the Cornell box 2.4 %, 2.1 % and 2.2 %). final's
+# good 6.0 % in ~18 s, final 4.6 % in ~109 s; on the Cornell box 2.4 %, 2.1 % and 2.2 %). final's
 # hemi-cubes are good's: 128 pixels and 2 x 2 per patch made the Cornell box worse (3.2 %) in 21 s.
 # Emitter gaps: 4 (patches facing an emitter across a narrow gap split down to a quarter of it)
 # took good from 7.3 to 6.0 % on the room for +22 % time, and from 4.7 to 2.1 % on the box. For
@@ -38,7 +38,7 @@ QUALITY_PRESETS = {
              "tolerance": {"progressive": 2e-2, "hemicube": 1e-5},
              "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 4, "direct_subsamples": 2}},
     # final's probe and texel pass take emitters in 4 x 4 pieces, as good's do: 8 x 8 gave the same error on
-    # the 4k room (4.6 %) and the Cornell box (2.2 %) for 20 % more time on the room (README)
+    # the 4k room (4.6 %) and the Cornell box (2.2 %) for 24 % more time on the room (README)
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
                         "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0,
                         "probe_pieces": 4},

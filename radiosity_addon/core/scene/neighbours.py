@@ -71,8 +71,13 @@ def range_chunks(start: np.ndarray, count: np.ndarray, chunk: int = PAIR_CHUNK):
     done = 0
     while done < len(start):
         stop = done + max(1, int(np.searchsorted(np.cumsum(count[done:]), chunk, side="right")))
-        n = count[done:stop]
-        if n.sum():
-            which = np.repeat(np.arange(done, stop), n)
-            yield which, np.repeat(start[done:stop] - np.concatenate([[0], np.cumsum(n)[:-1]]), n) + np.arange(n.sum())
+        if count[done:stop].sum():
+            which, at = expanded_ranges(start[done:stop], count[done:stop])
+            yield which + done, at
         done = stop
+
+
+def expanded_ranges(start: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(range index, position) of every position start[r] .. start[r] + count[r] - 1, in order."""
+    which = np.repeat(np.arange(len(count)), count)
+    return which, np.repeat(start - (np.cumsum(count) - count), count) + np.arange(len(which))

@@ -22,9 +22,10 @@ import numpy as np
 
 from ..scene import Patches
 from ..scene.geometry import area_vector, bilinear_each
+from ..scene.neighbours import expanded_ranges
 
 DIRECT = -1  # a vertex's `lookup` when it belongs to a patch drawn by its own triangles
-NO_PATCH = 0xFFFFFFFF  # a table cell no patch covers (nothing is drawn there)
+EMPTY_CELL = 0xFFFFFFFF  # a table cell no patch covers (nothing is drawn there)
 PARALLELOGRAM = 1e-6  # of a surface's size: c0 + c2 - c1 - c3 longer than this and it is no parallelogram
 CUT_QUANTUM = 2.0 ** -40  # cut parameters this close are one cut (one patch's edge seen from both sides)
 MAX_BINS = 4096  # uniform bins along one side of a surface, each holding at most one cut (else patch by patch)
@@ -169,7 +170,7 @@ def _lookup_surfaces(patches: Patches) -> dict | None:
     fits[np.unique(place[which][hits[flat] > 1])] = False
     if not fits.any():
         return None
-    table = np.full(int(cells.sum()), NO_PATCH, dtype=np.uint32)
+    table = np.full(int(cells.sum()), EMPTY_CELL, dtype=np.uint32)
     table[flat] = chosen[which]
     table = table[np.repeat(fits, cells)]
     table_offsets = np.concatenate([[0], np.cumsum(cells[fits])[:-1]]).astype(np.uint32)
@@ -192,41 +193,36 @@ def _bin_counts(cuts: dict) -> np.ndarray:
 def _bins(s_cuts: dict, t_cuts: dict, s_bins: np.ndarray, t_bins: np.ndarray, keep: np.ndarray):
     """The kept surfaces' bins, s then t, one surface after another (uint32: the last cut at or below each
     bin's start, counted in the surface's cuts), and per surface (s offset, count, t offset, count)."""
-    parts = []
+    found = []
     for cuts, bins in ((s_cuts, s_bins[keep]), (t_cuts, t_bins[keep])):
-        surfaces = cuts["surfaces"][keep]
-        owner = np.repeat(np.arange(len(bins)), bins)
-        index = np.arange(int(bins.sum())) - np.repeat(np.cumsum(bins) - bins, bins)
+        owner, index = expanded_ranges(np.zeros_like(bins), bins)
         start = index * ((1 << 40) // bins[owner])  # each bin's start, quantized like the cuts
-        found = np.searchsorted(cuts["keys"], (surfaces[owner] << 42) | start, side="right") - 1
-        parts.append((found - cuts["offset"][keep][owner], bins))
-    (s_found, s_count), (t_found, t_count) = parts
-    lengths = s_count + t_count
-    start = np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    values = np.empty(int(lengths.sum()), dtype=np.uint32)
-    in_s = np.repeat(np.arange(len(lengths)), s_count)
-    in_t = np.repeat(np.arange(len(lengths)), t_count)
-    values[start[in_s] + np.arange(len(in_s)) - np.repeat(np.cumsum(s_count) - s_count, s_count)] = s_found
-    values[start[in_t] + s_count[in_t] + np.arange(len(in_t)) - np.repeat(np.cumsum(t_count) - t_count, t_count)] = t_found
-    offsets = np.stack([start, s_count, start + s_count, t_count], axis=1).astype(np.uint32)
-    return values, offsets
+        at = np.searchsorted(cuts["keys"], (cuts["surfaces"][keep][owner] << 42) | start, side="right") - 1
+        found.append(at - cuts["offset"][keep][owner])
+    first = lambda bins: np.cumsum(bins) - bins  # noqa: E731
+    values, offsets = _side_by_side(found[0], first(s_bins[keep]), s_bins[keep],
+                                    found[1], first(t_bins[keep]), t_bins[keep])
+    return values.astype(np.uint32), offsets
 
 
 def _interleaved_cuts(s_cuts: dict, t_cuts: dict, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The kept surfaces' s cuts then t cuts, one surface after another (float32), and per surface
     (s offset, s count, t offset, t count) into them (uint32)."""
-    s_count, t_count = s_cuts["count"][keep], t_cuts["count"][keep]
-    lengths = s_count + t_count
-    start = np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    segment = np.repeat(np.arange(len(lengths)), lengths)
-    position = np.arange(int(lengths.sum())) - start[segment]
-    in_s = position < s_count[segment]
-    s_source = s_cuts["offset"][keep][segment] + position
-    t_source = t_cuts["offset"][keep][segment] + position - s_count[segment]
-    values = np.where(in_s, s_cuts["values"][np.where(in_s, s_source, 0)],
-                      t_cuts["values"][np.where(in_s, 0, t_source)])
-    offsets = np.stack([start, s_count, start + s_count, t_count], axis=1).astype(np.uint32)
+    values, offsets = _side_by_side(s_cuts["values"], s_cuts["offset"][keep], s_cuts["count"][keep],
+                                    t_cuts["values"], t_cuts["offset"][keep], t_cuts["count"][keep])
     return values.astype(np.float32), offsets
+
+
+def _side_by_side(s_values, s_first, s_count, t_values, t_first, t_count) -> tuple[np.ndarray, np.ndarray]:
+    """Per surface its ranges of `s_values` then of `t_values`, one surface after another, and per surface
+    (s offset, s count, t offset, t count) into the result (uint32)."""
+    lengths = s_count + t_count
+    start = np.cumsum(lengths) - lengths
+    segment, position = expanded_ranges(np.zeros_like(lengths), lengths)
+    in_s = position < s_count[segment]
+    values = np.where(in_s, s_values[np.where(in_s, s_first[segment] + position, 0)],
+                      t_values[np.where(in_s, 0, t_first[segment] + position - s_count[segment])])
+    return values, np.stack([start, s_count, start + s_count, t_count], axis=1).astype(np.uint32)
 
 
 def _parallelogram(corners: np.ndarray) -> np.ndarray:
@@ -258,9 +254,7 @@ def _cells(s_index: np.ndarray, t_index: np.ndarray, columns: np.ndarray):
     """Every table cell each patch covers: (cell index within its surface's table, patch row)."""
     width = s_index[:, 1] - s_index[:, 0]
     height = t_index[:, 1] - t_index[:, 0]
-    sizes = np.maximum(width * height, 0)
-    which = np.repeat(np.arange(len(width)), sizes)
-    k = np.arange(len(which)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    which, k = expanded_ranges(np.zeros_like(width), np.maximum(width * height, 0))
     i = s_index[which, 0] + k % np.maximum(width[which], 1)
     j = t_index[which, 0] + k // np.maximum(width[which], 1)
     return j * columns[which] + i, which
