@@ -2,7 +2,7 @@
 
 from .bindings import FORM_FACTOR_ONE, SHOT_ENERGY_ONE, image_unit, storage, texture_unit, uniform_block
 from .context import REQUIRED_GL, create_context, work_groups
-from .resources import GPU, Resources, open_gpu
+from .resources import GPU, Resources, open_gpu, render
 
-__all__ = ["FORM_FACTOR_ONE", "GPU", "SHOT_ENERGY_ONE", "REQUIRED_GL", "Resources", "create_context", "image_unit", "open_gpu", "storage",
-           "texture_unit", "uniform_block", "work_groups"]
+__all__ = ["FORM_FACTOR_ONE", "GPU", "SHOT_ENERGY_ONE", "REQUIRED_GL", "Resources", "create_context", "image_unit", "open_gpu", "render",
+           "storage", "texture_unit", "uniform_block", "work_groups"]

@@ -13,12 +13,14 @@ for a 4096 x 3072 atlas and its depth, once per probe round and per texel pass b
 from __future__ import annotations
 
 import contextlib
+import re
 import threading
 
 from .context import create_context
 from .shaders import includes, shader_source, with_defines
 
 
+CLIP_DISTANCE0 = 0x3000  # GL_CLIP_DISTANCE0 (moderngl has no name for it)
 MAX_SPARE_BYTES = 512 << 20  # scratch targets kept between scopes: two texel-pass atlases and their depth
 BYTES_PER_TEXEL = {"f1": 1, "u1": 1, "i1": 1, "f2": 2, "u2": 2, "i2": 2, "f4": 4, "u4": 4, "i4": 4}
 
@@ -27,6 +29,28 @@ def scratch_bytes(key: tuple) -> int:
     """Memory of a scratch target ("texture" | "depth", (w, h), components, dtype)."""
     _, (width, height), components, dtype = key
     return width * height * components * BYTES_PER_TEXEL[dtype]
+
+
+def clip_distances_written(source: str | None) -> int:
+    """How many gl_ClipDistance values a vertex or geometry shader's source declares it writes."""
+    match = re.search(r"out\s+float\s+gl_ClipDistance\s*\[\s*(\d+)\s*\]", source or "")
+    return int(match.group(1)) if match else 0
+
+
+def render(vao, **kwargs) -> None:
+    """`vao.render(**kwargs)` with the clip distances its program writes enabled, and disabled
+    after. A conformant driver (NVIDIA's, and the GL spec) clips only against enabled distances
+    and ignores the rest; Mesa's llvmpipe clips against every distance written, enabled or not,
+    so a missing enable passes every test here and draws each hemi-cube face over the whole atlas
+    on a real GPU (seen on an NVIDIA H200: black lightmaps)."""
+    count = (vao.program.extra or {}).get("clip_distances", 0)
+    for k in range(count):
+        vao.ctx.enable_direct(CLIP_DISTANCE0 + k)
+    try:
+        vao.render(**kwargs)
+    finally:
+        for k in range(count):
+            vao.ctx.disable_direct(CLIP_DISTANCE0 + k)
 
 
 _active = threading.local()  # per thread: the contexts made current by `active`, innermost last
@@ -66,8 +90,11 @@ class GPU:
         key = ("program", vertex, fragment, geometry, tuple(sorted((defines or {}).items())))
         if key not in self._programs:
             load = lambda name: with_defines(shader_source(name), defines) if name else None  # noqa: E731
-            self._programs[key] = self.ctx.program(vertex_shader=load(vertex), fragment_shader=load(fragment),
-                                                   geometry_shader=load(geometry))
+            program = self.ctx.program(vertex_shader=load(vertex), fragment_shader=load(fragment),
+                                       geometry_shader=load(geometry))
+            # the stage before rasterization writes the clip distances that `render` enables
+            program.extra = {"clip_distances": clip_distances_written(load(geometry or vertex))}
+            self._programs[key] = program
         return self._programs[key]
 
     def compute(self, name: str, defines: dict | None = None):

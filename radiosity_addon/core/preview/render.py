@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..gpu import GPU, Resources, open_gpu, storage, texture_unit
+from ..gpu import GPU, Resources, open_gpu, render, storage, texture_unit
 from ..lightmap import gl_mip_count
 from ..scene import Scene
 from .camera import Camera, default_camera
@@ -90,7 +90,7 @@ def render_preview(scene: Scene, lightmaps: dict, camera: Camera | None = None, 
                 vbo = scoped.buffer(_surface_triangles(scene, lightmap).tobytes())
                 vao = scoped.vertex_array(program, [(vbo, "3f 2f 1i", "in_position", "in_uv", "in_surface")])
                 texture.use(location=texture_unit("LIGHTMAP"))
-                vao.render()
+                render(vao)
         radiance = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=0), dtype=np.float32)
         ids = np.frombuffer(fbo.read(components=1, dtype="i4", attachment=1), dtype=np.int32)
     radiance = radiance.reshape(big_h, big_w, 4)[::-1, :, :3]  # GL rows start at the bottom

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gpu import GPU, storage
+from ..gpu import GPU, render, storage
 
 
 def rasterize(gpu: GPU, corners_texels: np.ndarray, lattice: np.ndarray, size: tuple[int, int]):
@@ -38,7 +38,7 @@ def rasterize(gpu: GPU, corners_texels: np.ndarray, lattice: np.ndarray, size: t
         ctx.depth_func = "<"
         corner_buffer.bind_to_storage_buffer(storage("LATTICE_CORNERS"))
         lattice_buffer.bind_to_storage_buffer(storage("LATTICE_VALUES"))
-        vao.render()
+        render(vao)
         values = np.frombuffer(fbo.read(components=4, dtype="f4", attachment=0), dtype=np.float32)
         ids = np.frombuffer(fbo.read(components=1, dtype="i4", attachment=1), dtype=np.int32)
     return values.reshape(height, width, 4)[..., :3], ids.reshape(height, width)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gpu import FORM_FACTOR_ONE, Resources, storage, texture_unit, work_groups
+from ..gpu import FORM_FACTOR_ONE, Resources, render, storage, texture_unit, work_groups
 from ..scene import Patches
 from ..scene.geometry import tangent_frames
 from .item_geometry import VERTEX_FORMAT, VERTEX_FORMAT_WITHOUT_LOOKUP, item_geometry
@@ -153,7 +153,7 @@ class HemicubeAtlas:
         self.framebuffer.use()
         self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
         ctx.enable_only(ctx.DEPTH_TEST)
-        self.vao.render(instances=count * 5)
+        render(self.vao, instances=count * 5)
 
     def bind(self, unit: int) -> None:
         self.item_texture.use(unit)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..gpu import Resources, texture_unit
+from ..gpu import Resources, render, texture_unit
 from ..scene import Patches
 
 TESSELLATION = 32  # most segments per patch side
@@ -112,7 +112,7 @@ class VisibilityMap:
         self.framebuffer.use()
         self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
         ctx.enable_only(ctx.DEPTH_TEST)
-        self.vao.render(mode=ctx.LINES_ADJACENCY)
+        render(self.vao, mode=ctx.LINES_ADJACENCY)
 
     def bind(self) -> None:
         """Bind the item buffer and the distance map for a pass that looks receivers up."""

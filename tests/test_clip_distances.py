@@ -1,0 +1,83 @@
+"""Item buffers keep each hemi-cube face (and a hemisphere map its front half) by gl_ClipDistance,
+which a conformant driver honours only while GL_CLIP_DISTANCEi is enabled. llvmpipe clips
+regardless, so the pictures here would look right without the enables: these tests check the
+GL state each draw runs under instead (without it an NVIDIA GPU baked black lightmaps)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import moderngl
+import numpy as np
+import pytest
+from scenes import box_faces, surface
+
+from radiosity_addon.core import scene_from_dict, subdivide
+from radiosity_addon.core.gpu.resources import CLIP_DISTANCE0, clip_distances_written
+from radiosity_addon.core.visibility import hemicube
+from radiosity_addon.core.visibility.hemisphere import VisibilityMap
+
+SHADERS = Path(__file__).resolve().parents[1] / "shaders"
+
+
+@pytest.fixture
+def recorded_draws(monkeypatch):
+    """The clip distances enabled at each draw call, and those left enabled at the end."""
+    enabled, draws = set(), []
+
+    def enable(ctx, enum):
+        enabled.add(enum - CLIP_DISTANCE0)
+        original_enable(ctx, enum)
+
+    def disable(ctx, enum):
+        enabled.discard(enum - CLIP_DISTANCE0)
+        original_disable(ctx, enum)
+
+    def draw(vao, *args, **kwargs):
+        draws.append(set(enabled))
+        return original_render(vao, *args, **kwargs)
+
+    original_enable, original_disable = moderngl.Context.enable_direct, moderngl.Context.disable_direct
+    original_render = moderngl.VertexArray.render
+    monkeypatch.setattr(moderngl.Context, "enable_direct", enable)
+    monkeypatch.setattr(moderngl.Context, "disable_direct", disable)
+    monkeypatch.setattr(moderngl.VertexArray, "render", draw)
+    return draws, enabled
+
+
+def small_room():
+    walls = [surface(f"wall{k}", face[::-1], 0.5, 1.0 if k == 0 else 0.0)
+             for k, face in enumerate(box_faces((0, 0, 0), (2, 2, 2)))]
+    scene = scene_from_dict({"surfaces": walls})
+    return scene, subdivide(scene, None, 1.0, np.zeros(len(scene), dtype=bool))
+
+
+def test_shaders_that_clip_declare_how_many_distances_they_write():
+    declared = {path.name: clip_distances_written(path.read_text()) for path in SHADERS.glob("*.*")
+                if "gl_ClipDistance" in path.read_text()}
+    assert declared == {"hemicube_item_buffer.vert": 5, "hemisphere_item_buffer.geom": 1}
+    for name, count in declared.items():  # every declared distance is written
+        text = (SHADERS / name).read_text()
+        assert all(f"gl_ClipDistance[{k}] =" in text for k in range(count)), name
+
+
+def test_hemicube_faces_are_drawn_with_their_five_clip_distances_enabled(gpu, recorded_draws):
+    draws, enabled = recorded_draws
+    scene, patches = small_room()
+    with gpu.resources() as res:
+        atlas = hemicube.HemicubeAtlas(res, patches, 16, scene.diameter, max_slots=4)
+        atlas.draw(tuple(v[:4] for v in hemicube.patch_frames(patches)))
+        items = np.frombuffer(atlas.item_texture.read(), dtype=np.uint32)
+    assert draws == [{0, 1, 2, 3, 4}] and not enabled
+    assert (items > 0).mean() > 0.9  # inside a closed room every pixel sees a wall
+
+
+@pytest.mark.parametrize("ortho_extent", [0.0, 3.0])  # a point's hemisphere, a sun's orthographic map
+def test_hemisphere_maps_are_drawn_with_their_clip_distance_enabled(gpu, recorded_draws, ortho_extent):
+    draws, enabled = recorded_draws
+    scene, patches = small_room()
+    variant = "hemicube" if ortho_extent else "guarded"
+    with gpu.resources() as res:
+        visibility = VisibilityMap(res, patches, 32, variant, scene.diameter)
+        visibility.render((1.0, 1.0, 1.0), ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, -1.0)), -1, ortho_extent)
+    assert draws == [{0}] and not enabled
