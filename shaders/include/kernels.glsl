@@ -4,7 +4,9 @@
 // the polygon (corners counter-clockwise seen from its front) first clipped to the receiver's
 // front half-space.
 float polygon_form_factor(vec3 polygon[4], vec3 x, vec3 n) {
-    vec3 poly[5];
+    // a quad clipped by a plane keeps at most 5 corners, but for x on (or very near) the polygon's
+    // own plane rounding can alternate the corners' signs (+ - + -): 2 corners and 4 crossings
+    vec3 poly[6];
     int count = 0;
     for (int k = 0; k < 4; ++k) {
         vec3 a = polygon[k] - x;

@@ -10,6 +10,7 @@ from __future__ import annotations
 from ..errors import GLUnavailable
 
 REQUIRED_GL = 430
+MAX_WORK_GROUPS = 65535  # work groups per dispatch dimension that every OpenGL 4.3 guarantees
 MISSING_LIBRARIES_HINT = (
     "install OpenGL/EGL (Debian/Ubuntu: sudo apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)"
 )

@@ -11,13 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gpu import SHOT_ENERGY_ONE, Resources, image_unit, storage, work_groups
+from ..gpu import MAX_WORK_GROUPS, SHOT_ENERGY_ONE, Resources, image_unit, storage, work_groups
 from ..scene import Patches
 from .elements import ElementTextures
 from .shooters import SKY, Shooter
 from .shots import MAX_SHOTS, ShotVisibility, patch_planes, shoot_in_batches
-
-MAX_GROUPS = 65535  # work groups per dispatch dimension guaranteed by OpenGL
 
 
 def set_uniforms(program, uniforms: dict) -> None:
@@ -29,7 +27,7 @@ def set_uniforms(program, uniforms: dict) -> None:
 def dispatch(program, count: int) -> None:
     """Run `program` over `count` invocations of 64, rows past the portable group limit in y."""
     groups = work_groups(count, 64)
-    rows = -(-groups // MAX_GROUPS)
+    rows = -(-groups // MAX_WORK_GROUPS)
     program.run(-(-groups // rows), rows)
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gpu import FORM_FACTOR_ONE, Resources, render, storage, texture_unit, work_groups
+from ..gpu import FORM_FACTOR_ONE, MAX_WORK_GROUPS, Resources, render, storage, texture_unit, work_groups
 from ..scene import Patches
 from ..scene.geometry import tangent_frames
 from .item_geometry import VERTEX_FORMAT, VERTEX_FORMAT_WITHOUT_LOOKUP, item_geometry
@@ -103,7 +103,8 @@ class HemicubeAtlas:
         if max_slots is not None:  # no larger than the batches need
             self.tiles_per_row = min(self.tiles_per_row, max_slots)
             tile_rows = min(tile_rows, -(-max_slots // self.tiles_per_row))
-        self.slots = self.tiles_per_row * tile_rows
+        # one work group of the reduction per slot in z: small hemi-cubes (8 px: 87 040 tiles) stay within its limit
+        self.slots = min(self.tiles_per_row * tile_rows, MAX_WORK_GROUPS)
         self.atlas_size = (self.tiles_per_row * resolution, tile_rows * 3 * resolution)
         self.row_length = self.patch_count + 1  # the last column: backs of patches
 

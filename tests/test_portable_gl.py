@@ -1,7 +1,9 @@
-"""Item buffers keep each hemi-cube face (and a hemisphere map its front half) by gl_ClipDistance,
-which a conformant driver honours only while GL_CLIP_DISTANCEi is enabled. llvmpipe clips
-regardless, so the pictures here would look right without the enables: these tests check the
-GL state each draw runs under instead (without it an NVIDIA GPU baked black lightmaps)."""
+"""What a conformant OpenGL driver needs that llvmpipe forgives, checked as GL state and limits
+rather than pictures (the pictures here are right either way).
+
+Item buffers keep each hemi-cube face (and a hemisphere map its front half) by gl_ClipDistance,
+which a conformant driver honours only while GL_CLIP_DISTANCEi is enabled; llvmpipe clips
+regardless (without the enables an NVIDIA GPU baked black lightmaps)."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import pytest
 from scenes import box_faces, surface
 
 from radiosity_addon.core import scene_from_dict, subdivide
+from radiosity_addon.core.gpu import MAX_WORK_GROUPS
 from radiosity_addon.core.gpu.resources import CLIP_DISTANCE0, clip_distances_written
 from radiosity_addon.core.visibility import hemicube
 from radiosity_addon.core.visibility.hemisphere import VisibilityMap
@@ -81,3 +84,10 @@ def test_hemisphere_maps_are_drawn_with_their_clip_distance_enabled(gpu, recorde
         visibility = VisibilityMap(res, patches, 32, variant, scene.diameter)
         visibility.render((1.0, 1.0, 1.0), ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, -1.0)), -1, ortho_extent)
     assert draws == [{0}] and not enabled
+
+
+def test_a_batch_of_small_hemi_cubes_stays_within_the_work_groups_one_dispatch_may_have(gpu):
+    scene, patches = small_room()
+    with gpu.resources() as res:
+        atlas = hemicube.HemicubeAtlas(res, patches, 8, scene.diameter)  # 512 x 170 tiles of 8 x 24 pixels
+        assert atlas.slots == MAX_WORK_GROUPS < atlas.tiles_per_row * (atlas.atlas_size[1] // 24)
