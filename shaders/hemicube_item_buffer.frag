@@ -10,7 +10,7 @@ out uint out_item;
 #if LOOKUP
 flat in int lookup;
 flat in uint seen_from_front;
-in vec2 surface_st;
+in vec2 surface_st;  // (s, t) on a parallelogram; on a skewed quad the point in its plane
 
 // Surfaces drawn once (visibility/item_geometry.py): per surface its cut, bin and table offsets; the
 // cut parameters; per bin the cut at or below its start; the patch tables; each front's back twin.
@@ -20,7 +20,7 @@ layout(std430, binding = STORAGE_LOOKUP_BINS) readonly buffer Bins { uint bin_cu
 layout(std430, binding = STORAGE_LOOKUP_TABLE) readonly buffer Table { uint table[]; };
 layout(std430, binding = STORAGE_LOOKUP_TWINS) readonly buffer Twins { int twin[]; };
 
-const int RECORD = 3;  // uvec4s per surface
+const int RECORD = 5;  // uvec4s per surface
 const uint EMPTY_CELL = 0xFFFFFFFFu;
 
 // index i of the cell [cut[first + i], cut[first + i + 1]) holding x: the cut at or below the start of
@@ -32,6 +32,27 @@ uint cell_of(float x, uint first, uint count, uint first_bin, uint bins) {
     return i;
 }
 
+float cross2(vec2 a, vec2 b) {
+    return a.x * b.y - a.y * b.x;
+}
+
+// (s, t) of the point p of a convex quad p(s, t) = e s + f t + g s t (plane coordinates, corner 0 at
+// the origin, diagonal 1): v solves k2 v^2 + k1 v + k0 = 0, both roots taken stably (a parallelogram
+// has k2 = 0 and the first root only), the one in [0, 1]; then s from the larger component.
+vec2 inverse_bilinear(vec2 p, vec2 e, vec2 f, vec2 g) {
+    float k2 = cross2(g, f);
+    float k1 = cross2(e, f) + cross2(p, g);
+    float k0 = cross2(p, e);
+    float w = sqrt(max(k1 * k1 - 4.0 * k0 * k2, 0.0));
+    float q = -0.5 * (k1 + (k1 >= 0.0 ? w : -w));
+    float v = k0 / q;
+    float other = q / k2;
+    if (abs(other - clamp(other, 0.0, 1.0)) < abs(v - clamp(v, 0.0, 1.0))) v = other;
+    vec2 d = e + g * v;
+    float s = abs(d.x) >= abs(d.y) ? (p.x - f.x * v) / d.x : (p.y - f.y * v) / d.y;
+    return vec2(s, v);
+}
+
 #endif
 
 void main() {
@@ -40,9 +61,15 @@ void main() {
     if (lookup >= 0) {
         uvec4 cuts = surface_record[lookup * RECORD];
         uvec4 bins = surface_record[lookup * RECORD + 1];
-        uint i = cell_of(surface_st.x, cuts.x, cuts.y, bins.x, bins.y);
-        uint j = cell_of(surface_st.y, cuts.z, cuts.w, bins.z, bins.w);
-        uint patch_id = table[surface_record[lookup * RECORD + 2].x + j * (cuts.y - 1u) + i];
+        uvec4 table_skewed = surface_record[lookup * RECORD + 2];
+        vec2 st = surface_st;
+        if (table_skewed.y != 0u) {
+            vec4 ef = uintBitsToFloat(surface_record[lookup * RECORD + 3]);
+            st = inverse_bilinear(surface_st, ef.xy, ef.zw, uintBitsToFloat(surface_record[lookup * RECORD + 4].xy));
+        }
+        uint i = cell_of(st.x, cuts.x, cuts.y, bins.x, bins.y);
+        uint j = cell_of(st.y, cuts.z, cuts.w, bins.z, bins.w);
+        uint patch_id = table[table_skewed.x + j * (cuts.y - 1u) + i];
         if (patch_id == EMPTY_CELL) discard;
         out_item = seen_from_front != 0u ? patch_id + 1u
                  : (twin[patch_id] >= 0 ? uint(twin[patch_id]) + 1u : back_item);

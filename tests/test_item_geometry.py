@@ -9,6 +9,7 @@ from scenes import box_faces, surface
 
 from radiosity_addon.core import scene_from_dict, subdivide
 from radiosity_addon.core.scene import split_patches
+from radiosity_addon.core.scene.geometry import bilinear_each
 from radiosity_addon.core.visibility import hemicube, item_geometry as items
 
 
@@ -30,10 +31,29 @@ def cut_room():
     return scene, patches
 
 
+def emulated_inverse_bilinear(geometry: items.ItemGeometry, look: int, plane: np.ndarray) -> np.ndarray:
+    """The fragment shader's (s, t) on a skewed quad, in float32, from points (n, 2) in its plane coordinates."""
+    e, f = geometry.surfaces[look, 3].view(np.float32).reshape(2, 2)
+    g = geometry.surfaces[look, 4, :2].view(np.float32)
+    p = plane.astype(np.float32)
+    cross = lambda a, b: a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]  # noqa: E731
+    k2, k1, k0 = cross(g, f), cross(e, f) + cross(p, g), cross(p, e)
+    w = np.sqrt(np.maximum(k1 * k1 - 4 * k0 * k2, 0))
+    q = -0.5 * (k1 + np.where(k1 >= 0, w, -w))
+    v, other = k0 / q, q / k2
+    outside = lambda x: np.abs(x - np.clip(x, 0, 1))  # noqa: E731
+    v = np.where(outside(other) < outside(v), other, v)
+    d = e + g * v[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):  # the shader divides by the larger component only
+        s = np.where(np.abs(d[:, 0]) >= np.abs(d[:, 1]), (p[:, 0] - f[0] * v) / d[:, 0],
+                     (p[:, 1] - f[1] * v) / d[:, 1])
+    return np.stack([s, v], axis=1)
+
+
 def emulated_lookup(geometry: items.ItemGeometry, look: int, st: np.ndarray) -> np.ndarray:
     """The fragment shader's table lookup, in numpy, at parameters st (n, 2) of looked-up surface `look`:
     each parameter's uniform bin gives the cut at or below it, or the one before the next."""
-    cuts, bins, (table_offset, *_) = geometry.surfaces[look]
+    cuts, bins, (table_offset, *_) = geometry.surfaces[look, :3]
     cells = []
     for axis in (0, 1):
         first, count, first_bin, bin_count = cuts[2 * axis], cuts[2 * axis + 1], bins[2 * axis], bins[2 * axis + 1]
@@ -53,15 +73,24 @@ def test_every_patch_centre_is_found_in_its_surfaces_table():
     scene, patches = cut_room()
     geometry = items.item_geometry(patches)
     looked_up = items._lookup_surfaces(patches)["surfaces"]
-    # the walls and the panel, but not the trapezoid or the triangle, nor a surface whose random cuts
-    # come closer than 1 / MAX_BINS
-    assert geometry.looked_up == len(looked_up) >= 5
-    assert not np.isin([len(scene) - 3, len(scene) - 1], looked_up).any()
+    # the walls, the panel and the trapezoid (flat, skewed), but not the triangle, nor a surface whose random
+    # cuts come closer than 1 / MAX_BINS
+    assert geometry.looked_up == len(looked_up) >= 6
+    trapezoid, triangle = len(scene) - 3, len(scene) - 1
+    assert trapezoid in looked_up and triangle not in looked_up
     assert scene.is_triangle[looked_up].sum() == 0
+    skewed = geometry.surfaces[:, 2, 1].astype(bool)
+    assert (looked_up[skewed] == [trapezoid]).all()
+    corner_st = geometry.vertices["st"][-4 * len(looked_up):].reshape(-1, 4, 2)
     fronts = np.arange(patches.front_count)
     for look, surface_index in enumerate(looked_up):
         mine = fronts[patches.surface[fronts] == surface_index]
         centres = patches.params[mine].mean(axis=1)
+        if skewed[look]:  # the triangles carry plane coordinates; the shader inverts the bilinear map
+            plane = bilinear_each(np.repeat(corner_st[look][None], len(mine), axis=0), centres[:, 0], centres[:, 1])
+            found = emulated_inverse_bilinear(geometry, look, plane)
+            assert np.abs(found - centres).max() < 1e-5
+            centres = found
         assert (emulated_lookup(geometry, look, centres) == mine).all()
     # the rest is drawn patch by patch: two triangles a quad, one a triangle
     direct = ~np.isin(patches.surface[fronts], looked_up)

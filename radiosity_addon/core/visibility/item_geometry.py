@@ -1,17 +1,19 @@
 """What item buffers draw: the scene's geometry, each primitive telling which patch it shows.
 
 A hemi-cube batch draws the whole scene once per face of every hemi-cube, so its cost grows with
-the triangles drawn (on llvmpipe, measured: time in proportion to them). A parallelogram surface
+the triangles drawn (on llvmpipe, measured: time in proportion to them). A flat convex quad surface
 split into many patches (a wall, a floor, refined near an emitter) is therefore drawn once, as its
-own two triangles carrying its bilinear parameters (s, t) — affine on a parallelogram, so
-interpolation gives them exactly — and the fragment shader finds the patch whose rectangle holds
-them in a table over the surface's distinct cut parameters (every patch of a quad surface is a
-rectangle of its parameter domain: the grid of `subdivide`, cut again by `split_patches`). The same
-pixel centre gets the same patch as drawing the patches' own triangles would, up to rounding at
-their shared edges.
+own two triangles, and the fragment shader finds the patch whose rectangle of the surface's
+bilinear parameters (s, t) holds the pixel, in a table over the surface's distinct cut parameters
+(every patch of a quad surface is a rectangle of its parameter domain: the grid of `subdivide`, cut
+again by `split_patches`). On a parallelogram (s, t) is affine, so the triangles carry it and
+interpolation gives it exactly; on any other flat quad (a skewed floor) they carry the point's
+coordinates in the quad's plane, affine too, and the shader inverts the bilinear map there (a
+quadratic). The same pixel centre gets the same patch as drawing the patches' own triangles would,
+up to rounding at their shared edges.
 
-Everything else (triangles' pieces, other quads, surfaces of one patch, patches without their
-rectangle) is drawn patch by patch.
+Everything else (triangles' pieces, bent or concave quads, surfaces of one patch, patches without
+their rectangle) is drawn patch by patch.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from ..scene.neighbours import expanded_ranges
 DIRECT = -1  # a vertex's `lookup` when it belongs to a patch drawn by its own triangles
 EMPTY_CELL = 0xFFFFFFFF  # a table cell no patch covers (nothing is drawn there)
 PARALLELOGRAM = 1e-6  # of a surface's size: c0 + c2 - c1 - c3 longer than this and it is no parallelogram
+FLAT = 1e-6  # of a surface's size: c3 farther than this from the plane of c0, c1, c2 and it is bent
 CUT_QUANTUM = 2.0 ** -40  # cut parameters this close are one cut (one patch's edge seen from both sides)
 MAX_BINS = 4096  # uniform bins along one side of a surface, each holding at most one cut (else patch by patch)
 TABLE_CELLS_PER_PATCH = 16  # a surface whose cut table would hold more cells than this per patch is drawn
@@ -38,7 +41,7 @@ TABLE_CELLS_PER_PATCH = 16  # a surface whose cut table would hold more cells th
 # room's 128-px `good` shooter maps (0.28) come out even, 256-px probes (< 0.05) lose.
 LOOKUP_PIXELS_PER_TRIANGLE = 0.5
 
-RECORD = 3  # uvec4s per looked-up surface (hemicube_item_buffer.frag)
+RECORD = 5  # uvec4s per looked-up surface (hemicube_item_buffer.frag)
 VERTEX_FORMAT = "3f 3f 1u 1i 1i 2f"  # position, normal, patch, twin, lookup, (s, t)
 VERTEX_FORMAT_WITHOUT_LOOKUP = "3f 3f 1u 1i 12x"  # the same rows for a shader without the lookup
 VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("lookup", "i4"), ("st", "f4", 2)]
@@ -49,7 +52,8 @@ class ItemGeometry:
     vertices: np.ndarray  # VERTEX_DTYPE rows
     indices: np.ndarray  # (3 T,) uint32 triangles
     surfaces: np.ndarray  # (L, RECORD, 4) uint32 per looked-up surface: (cuts s offset, count, cuts t offset,
-    # count), (bins s offset, count, bins t offset, count), (table offset, 0, 0, 0)
+    # count), (bins s offset, count, bins t offset, count), (table offset, skewed, 0, 0), then for a skewed
+    # quad the float32 bits of its bilinear map in plane coordinates (e, f), (g, 0, 0): p = e s + f t + g s t
     cuts: np.ndarray  # float32 cut parameters, each surface's s then t, ascending from 0 to 1
     bins: np.ndarray  # uint32 per surface and side, N uniform bins (N a power of two): the last cut at or
     # below each bin's start, so a parameter's cell is that one or the next (a binary search made the
@@ -81,7 +85,8 @@ def item_geometry(patches: Patches, face_pixels: int | None = None) -> ItemGeome
         empty = np.zeros((0, RECORD, 4), dtype=np.uint32)
         return ItemGeometry(vertices, indices, empty, np.zeros(1, np.float32), np.zeros(1, np.uint32),
                             np.zeros(1, np.uint32), twins)
-    quads, quad_indices = _surface_geometry(patches.surface_corners[lookup["surfaces"]], len(vertices))
+    quads, quad_indices = _surface_geometry(patches.surface_corners[lookup["surfaces"]], lookup["corner_st"],
+                                            len(vertices))
     return ItemGeometry(np.concatenate([vertices, quads]), np.concatenate([indices, quad_indices]),
                         lookup["records"], lookup["cuts"], lookup["bins"], lookup["table"], twins)
 
@@ -105,7 +110,8 @@ def _patch_geometry(patches: Patches, rows: np.ndarray) -> tuple[np.ndarray, np.
     return vertices, indices[keep].astype(np.uint32)
 
 
-def _surface_geometry(corners: np.ndarray, first_vertex: int) -> tuple[np.ndarray, np.ndarray]:
+def _surface_geometry(corners: np.ndarray, corner_st: np.ndarray, first_vertex: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two triangles per looked-up surface, carrying `corner_st` (n, 4, 2) at its corners."""
     count = len(corners)
     area = area_vector(corners)
     vertices = np.empty(count * 4, dtype=VERTEX_DTYPE)
@@ -114,7 +120,7 @@ def _surface_geometry(corners: np.ndarray, first_vertex: int) -> tuple[np.ndarra
     vertices["id"] = 0
     vertices["twin"] = -1
     vertices["lookup"] = np.repeat(np.arange(count, dtype=np.int32), 4)
-    vertices["st"] = np.tile([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], (count, 1))
+    vertices["st"] = corner_st.reshape(-1, 2)
     base = first_vertex + (np.arange(count) * 4)[:, None]
     return vertices, (base + np.array([0, 1, 2, 0, 2, 3])).ravel().astype(np.uint32)
 
@@ -131,7 +137,7 @@ def _lookup_surfaces(patches: Patches) -> dict | None:
     per_surface = np.bincount(surface, minlength=surfaces)
     known = np.isfinite(params).all(axis=(1, 2))
     candidate = (per_surface >= 2) & (np.bincount(surface, weights=~known, minlength=surfaces) == 0)
-    candidate &= _parallelogram(corners)
+    candidate &= _flat_convex_quad(corners)
     # the patches must be where their rectangles say (the bilinear map of the surface at their corners)
     mine = candidate[surface]
     rect_corners = _rectangle_corners(params[mine])
@@ -178,7 +184,11 @@ def _lookup_surfaces(patches: Patches) -> dict | None:
     bins, bin_offsets = _bins(s_cuts, t_cuts, s_bins, t_bins, fits)
     records = np.zeros((int(fits.sum()), RECORD, 4), dtype=np.uint32)
     records[:, 0], records[:, 1], records[:, 2, 0] = offsets, bin_offsets, table_offsets
-    return {"surfaces": listed[fits], "records": records, "cuts": cuts, "bins": bins, "table": table}
+    kept = listed[fits]
+    corner_st, skewed, maps = _plane_maps(corners[kept])
+    records[:, 2, 1] = skewed
+    records[:, 3:] = maps.view(np.uint32)
+    return {"surfaces": kept, "records": records, "cuts": cuts, "bins": bins, "table": table, "corner_st": corner_st}
 
 
 def _bin_counts(cuts: dict) -> np.ndarray:
@@ -223,6 +233,42 @@ def _side_by_side(s_values, s_first, s_count, t_values, t_first, t_count) -> tup
     values = np.where(in_s, s_values[np.where(in_s, s_first[segment] + position, 0)],
                       t_values[np.where(in_s, 0, t_first[segment] + position - s_count[segment])])
     return values, np.stack([start, s_count, start + s_count, t_count], axis=1).astype(np.uint32)
+
+
+def _plane_maps(corners: np.ndarray):
+    """What the looked-up quads' vertices carry and how their fragments find (s, t): per quad its corners'
+    (s, t) (the unit square) on a parallelogram, else their coordinates in the quad's plane (axes along
+    c1 - c0 and normal x that, in units of the diagonal c2 - c0, from c0); whether it is skewed; and the
+    bilinear map in those coordinates, float32 (n, 2, 4): (e, f), (g, 0, 0), p(s, t) = e s + f t + g s t."""
+    count = len(corners)
+    skewed = ~_parallelogram(corners)
+    normal = area_vector(corners)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    x = corners[:, 1] - corners[:, 0]
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    y = np.cross(normal, x)
+    relative = (corners - corners[:, :1]) / np.linalg.norm(corners[:, 2] - corners[:, 0], axis=1)[:, None, None]
+    plane = np.stack([(relative * x[:, None]).sum(axis=2), (relative * y[:, None]).sum(axis=2)], axis=2)
+    square = np.broadcast_to(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]), (count, 4, 2))
+    corner_st = np.where(skewed[:, None, None], plane, square)
+    e, f = plane[:, 1], plane[:, 3]
+    g = plane[:, 0] - plane[:, 1] + plane[:, 2] - plane[:, 3]
+    maps = np.zeros((count, 2, 4), dtype=np.float32)
+    maps[:, 0, :2], maps[:, 0, 2:], maps[:, 1, :2] = e, f, g
+    return corner_st, skewed.astype(np.uint32), maps
+
+
+def _flat_convex_quad(corners: np.ndarray) -> np.ndarray:
+    """(S,) bool: a quad (not a triangle) in one plane, convex (so its bilinear map is one to one)."""
+    size = np.linalg.norm(corners[:, 2] - corners[:, 0], axis=1)
+    area = area_vector(corners)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        normal = area / np.linalg.norm(area, axis=1, keepdims=True)
+    edges = np.roll(corners, -1, axis=1) - corners
+    turns = (np.cross(edges, np.roll(edges, -1, axis=1)) * normal[:, None]).sum(axis=2)
+    short = np.linalg.norm(edges, axis=2) <= PARALLELOGRAM * size[:, None]  # a triangle's repeated corner
+    flat = np.abs(((corners[:, 3] - corners[:, 0]) * normal).sum(axis=1)) <= FLAT * size
+    return (np.linalg.norm(area, axis=1) > 0) & flat & ~short.any(axis=1) & (turns > 0).all(axis=1)
 
 
 def _parallelogram(corners: np.ndarray) -> np.ndarray:
