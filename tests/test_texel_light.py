@@ -10,7 +10,7 @@ from scenes import box_faces, surface
 
 from radiosity_addon.core import (LightmapSettings, SolveSettings, bake_lightmaps, point_to_polygon,
                                   scene_from_dict, solve, subdivide)
-from radiosity_addon.core.lightmap.direct import direct_light
+from radiosity_addon.core.lightmap.direct import direct_light, matched_map_resolution
 
 FLOOR = [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]
 UV = [[0, 0], [1, 0], [1, 1], [0, 1]]
@@ -222,3 +222,34 @@ def test_an_emitters_pieces_send_their_own_reflected_light(gpu):
     assert from_left[0] > 2 * from_left[1] and from_right[1] > 2 * from_right[0]
     np.testing.assert_allclose(from_left + from_right, plain * 0.5, rtol=1e-4)
     np.testing.assert_allclose(from_left[2], from_right[2], rtol=1e-3)  # the middle sees both alike
+
+
+def test_the_direct_maps_resolve_no_finer_than_the_finest_texel():
+    """A map R pixels across has pixels 4 d / R wide at distance d on its axis: R = 4 D / t puts
+    one texel t at the scene's diameter D, rounded up to a multiple of 16, within [64, the cap]."""
+    assert matched_map_resolution(0.95, 1 / 64, 1024) == 256  # 243.2: a 55 cm box at 64 texels/m
+    assert matched_map_resolution(7.7, 1 / 64, 1024) == 1024  # a furnished room keeps the cap
+    assert matched_map_resolution(7.7, 1 / 64, 512) == 512
+    assert matched_map_resolution(1.0, 1.0, 1024) == 64  # coarse lightmaps: the floor
+    assert matched_map_resolution(1.0, 1.0, 32) == 32  # a cap under the floor is kept
+    assert matched_map_resolution(1.0, float("inf"), 1024) == 64  # no lightmap at all
+
+
+def test_a_bake_shoots_its_direct_light_at_the_matched_resolution(gpu, monkeypatch):
+    """The 2 m floor of the Lambert test (diameter 2.87 m with its emitter) at 16 texels/m: the
+    texel pass's maps are 4 x 2.87 x 16 -> 192 pixels across, not the 1024 of the setting."""
+    from radiosity_addon.core.lightmap import bake as lightmap_bake
+    emitter_corners = [[0.75, 0.75, 0.4], [0.75, 1.25, 0.4], [1.25, 1.25, 0.4], [1.25, 0.75, 0.4]]
+    scene = scene_from_dict({"surfaces": [{**surface("floor", FLOOR, 0.5, 0.0), "uv": UV},
+                                          {**surface("emitter", emitter_corners, 0.0, 2.0), "uv": UV}]})
+    solution = solve(scene, SolveSettings(method="hemicube", subdiv=1, elements=1, hemicube_res=32), gpu=gpu)
+    used = []
+    real = lightmap_bake.direct_light
+    monkeypatch.setattr(lightmap_bake, "direct_light",
+                        lambda *args, **kw: used.append(args[6]) or real(*args, **kw))
+    settings = LightmapSettings(texel_density=16)
+    bake_lightmaps(scene, solution, settings, gpu=gpu)
+    sizes = lightmap_bake.lightmap_sizes(scene, settings)  # floor ~32 texels a side + gutters, emitter >= 8
+    finest = min(np.sqrt(area / np.prod(sizes[name])) for name, area in (("floor", 4.0), ("emitter", 0.25)))
+    assert used and set(used) == {matched_map_resolution(scene.diameter, finest, 1024)}
+    assert 160 <= used[0] <= 256

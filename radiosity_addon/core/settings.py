@@ -146,7 +146,8 @@ class LightmapSettings:
     gutter: int = LIGHTMAP_GUTTER
     content: str = "light"  # "light": H, shown as emission + albedo x lightmap; "combined": B = E + ρH
     direct_per_texel: bool = True  # lamps' and emitters' light recomputed at every texel (sharp shadows)
-    direct_map_resolution: int = 1024  # pixels across the visibility maps of that direct light
+    direct_map_resolution: int = 1024  # pixels across the visibility maps of that direct light, at most (fewer where
+    # a pixel at the scene's diameter would still be finer than a texel: lightmap.direct.matched_map_resolution)
     direct_pieces: int = 8  # emissive polygons and area lamps shoot that light in up to N x N pieces (penumbrae)
     direct_subsamples: int = 4  # where that light is sharp, a texel takes the mean of N x N points over its square (1: its centre)
 

@@ -18,7 +18,7 @@ gutters, 0 elsewhere.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -31,8 +31,8 @@ from ..shooting.sky import element_frames
 from ..uvspace import rasterize
 from . import charts
 from .contact import in_contact
-from .direct import (direct_light, emitters_reflected_light, emitters_reflection, footprint_points, sharp_texels,
-                     texel_axes, texel_points)
+from .direct import (direct_light, emitters_reflected_light, emitters_reflection, footprint_points,
+                     matched_map_resolution, sharp_texels, texel_axes, texel_points)
 from .lattice import continuous_lattice, element_values
 from .mips import filled_image, mip_levels
 from .size import resolve_size
@@ -150,6 +150,12 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     settings = settings or LightmapSettings()
     layouts = plan_layouts(scene, settings, objects)
     objects, object_of_surface, surface_uv = layouts.objects, layouts.object_of_surface, layouts.surface_uv
+    # the direct light's maps resolve no finer than the finest texel (an object's area over its
+    # lightmap's texels: an upper bound on its texels' density, so the maps err on the fine side)
+    finest_texel = min((math.sqrt(scene.area[indices].sum() / math.prod(layouts.sizes[name]))
+                        for name, indices in objects.items()), default=math.inf)
+    settings = replace(settings, direct_map_resolution=matched_map_resolution(
+        scene.diameter, finest_texel, settings.direct_map_resolution))
     patches = solution.patches
     light = settings.content == "light"
     report = solution.report

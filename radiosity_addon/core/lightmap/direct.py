@@ -28,6 +28,20 @@ from ..shooting import direct_shooters, emitter_shooters, light_at_points
 from ..uvspace import rasterize
 
 REFLECTION_FLOOR = 1e-4  # emitters reflecting less than this share of the brightest emission are not shot again
+MIN_MAP_RESOLUTION = 64  # the coarsest visibility map `matched_map_resolution` gives
+MAP_RESOLUTION_STEP = 16  # ... and its multiple (a hemi-cube's top face is a quarter of it, times 2)
+
+
+def matched_map_resolution(diameter: float, finest_texel: float, cap: int) -> int:
+    """Pixels across the direct light's visibility maps, no finer than the lightmaps can show: a map
+    R pixels across (a hemi-cube's unfolded cross, its top face R / 2 pixels over 90 degrees) has
+    pixels 4 d / R wide at distance d along its axis, so at the scene's `diameter` D (the farthest a
+    texel can be from a shooter) a pixel is one of the finest texels t when R = 4 D / t. `cap`
+    (`LightmapSettings.direct_map_resolution`) bounds it: a 55 cm box at 64 texels/m needs ~300
+    pixels, not `final`'s 1024, which a 7 m room at that density does need (its 4 D / t is ~1 900)."""
+    needed = 4.0 * diameter / max(finest_texel, 1e-30)
+    stepped = MAP_RESOLUTION_STEP * int(np.ceil(min(needed, 1e9) / MAP_RESOLUTION_STEP))
+    return int(min(cap, max(MIN_MAP_RESOLUTION, stepped)))
 
 
 def texel_points(gpu: GPU, patches: Patches, rows: np.ndarray, corners_texels: np.ndarray, size) -> tuple:
