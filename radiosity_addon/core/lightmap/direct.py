@@ -37,8 +37,8 @@ def matched_map_resolution(diameter: float, finest_texel: float, cap: int) -> in
     R pixels across (a hemi-cube's unfolded cross, its top face R / 2 pixels over 90 degrees) has
     pixels 4 d / R wide at distance d along its axis, so at the scene's `diameter` D (the farthest a
     texel can be from a shooter) a pixel is one of the finest texels t when R = 4 D / t. `cap`
-    (`LightmapSettings.direct_map_resolution`) bounds it: a 55 cm box at 64 texels/m needs ~300
-    pixels, not `final`'s 1024, which a 7 m room at that density does need (its 4 D / t is ~1 900)."""
+    (`LightmapSettings.direct_map_resolution`) bounds it: a 55 cm box at 64 texels/m needs ~340
+    pixels, not `final`'s 1024, which a 7 m room at that density does need (its 4 D / t is ~3 000)."""
     needed = 4.0 * diameter / max(finest_texel, 1e-30)
     stepped = MAP_RESOLUTION_STEP * int(np.ceil(min(needed, 1e9) / MAP_RESOLUTION_STEP))
     return int(min(cap, max(MIN_MAP_RESOLUTION, stepped)))
