@@ -236,8 +236,8 @@ def test_the_direct_maps_resolve_no_finer_than_the_finest_texel():
 
 
 def test_a_bake_shoots_its_direct_light_at_the_matched_resolution(gpu, monkeypatch):
-    """The 2 m floor of the Lambert test (diameter 2.87 m with its emitter) at 16 texels/m: the
-    texel pass's maps are 4 x 2.87 x 16 -> 192 pixels across, not the 1024 of the setting."""
+    """The 2 m floor of the Lambert test (diameter 2.86 m with its emitter) at 16 texels/m: the
+    texel pass's maps are 4 x 2.86 x 16 = 183 -> 192 pixels across, not the 1024 of the setting."""
     from radiosity_addon.core.lightmap import bake as lightmap_bake
     emitter_corners = [[0.75, 0.75, 0.4], [0.75, 1.25, 0.4], [1.25, 1.25, 0.4], [1.25, 0.75, 0.4]]
     scene = scene_from_dict({"surfaces": [{**surface("floor", FLOOR, 0.5, 0.0), "uv": UV},
