@@ -10,18 +10,21 @@ out uint out_item;
 #if LOOKUP
 flat in int lookup;
 flat in uint seen_from_front;
-in vec2 surface_st;  // (s, t) on a parallelogram; on a skewed quad the point in its plane
+in vec2 surface_st;  // (s, t) on a parallelogram; on a skewed quad the point in its plane; on a grid
+                    // triangle its barycentric weights (w1, w2)
 
-// Surfaces drawn once (visibility/item_geometry.py): per surface its cut, bin and table offsets; the
-// cut parameters; per bin the cut at or below its start; the patch tables; each front's back twin.
+// Units drawn once (visibility/item_geometry.py: quad surfaces, grid triangles): per unit its cut, bin and
+// table offsets; the cut parameters; per bin the cut at or below its start; the patch tables; each front's back twin.
 layout(std430, binding = STORAGE_LOOKUP_SURFACES) readonly buffer Surfaces { uvec4 surface_record[]; };
 layout(std430, binding = STORAGE_LOOKUP_CUTS) readonly buffer Cuts { float cut[]; };
 layout(std430, binding = STORAGE_LOOKUP_BINS) readonly buffer Bins { uint bin_cut[]; };
 layout(std430, binding = STORAGE_LOOKUP_TABLE) readonly buffer Table { uint table[]; };
 layout(std430, binding = STORAGE_LOOKUP_TWINS) readonly buffer Twins { int twin[]; };
 
-const int RECORD = 5;  // uvec4s per surface
+const int RECORD = 5;  // uvec4s per unit
 const uint EMPTY_CELL = 0xFFFFFFFFu;
+const uint SKEWED_QUAD = 1u;     // a record's map (visibility/item_geometry.py): 0 a parallelogram, whose
+const uint GRID_TRIANGLE = 2u;   // (s, t) the vertices carry; 1 a skewed quad; 2 a grid triangle
 
 // index i of the cell [cut[first + i], cut[first + i + 1]) holding x: the cut at or below the start of
 // x's uniform bin, or the next one (a bin holds at most one cut inside it)
@@ -63,9 +66,11 @@ void main() {
         uvec4 bins = surface_record[lookup * RECORD + 1];
         uvec4 table_skewed = surface_record[lookup * RECORD + 2];
         vec2 st = surface_st;
-        if (table_skewed.y != 0u) {
+        if (table_skewed.y == SKEWED_QUAD) {
             vec4 ef = uintBitsToFloat(surface_record[lookup * RECORD + 3]);
             st = inverse_bilinear(surface_st, ef.xy, ef.zw, uintBitsToFloat(surface_record[lookup * RECORD + 4].xy));
+        } else if (table_skewed.y == GRID_TRIANGLE) {  // barycentric (w1, w2) -> (w1 / (1 - w2), w2)
+            st = vec2(surface_st.x / max(1.0 - surface_st.y, 1e-30), surface_st.y);
         }
         uint i = cell_of(st.x, cuts.x, cuts.y, bins.x, bins.y);
         uint j = cell_of(st.y, cuts.z, cuts.w, bins.z, bins.w);

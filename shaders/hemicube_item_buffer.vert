@@ -2,8 +2,8 @@
 // Hemi-cube item buffer: draws every patch into one face of one hemi-cube.
 // One instance = one face of one patch's hemi-cube; its tile in the atlas is
 // kept apart from the others by clip distances, so a batch of hemi-cubes is a
-// single instanced draw. A parallelogram of many patches is drawn once: the
-// fragment shader finds the patch under each pixel (visibility/item_geometry.py;
+// single instanced draw. A flat quad surface or a grid triangle of many patches
+// is drawn once: the fragment shader finds the patch under each pixel (visibility/item_geometry.py;
 // LOOKUP 0 compiles a variant without it, for atlases that draw every patch).
 
 in vec3 in_position;
@@ -11,8 +11,8 @@ in vec3 in_normal;      // the triangle's front normal
 in uint in_patch;       // patch id (a front patch)
 in int in_twin;         // its back patch, -1 when its back is not simulated
 #if LOOKUP
-in int in_lookup;       // -1: the patch's own triangles; else the surface's entry in the patch tables
-in vec2 in_st;          // the surface's bilinear parameters at this corner (looked-up surfaces)
+in int in_lookup;       // -1: the patch's own triangles; else its unit's entry in the patch tables
+in vec2 in_st;          // the unit's parameters at this corner (visibility/item_geometry.py)
 #endif
 
 in vec3 in_eye;         // per instance: hemi-cube centre
@@ -32,7 +32,7 @@ flat out uint item;
 #if LOOKUP
 flat out int lookup;
 flat out uint seen_from_front;
-out vec2 surface_st;    // affine on a parallelogram: interpolated exactly
+out vec2 surface_st;    // affine over each triangle drawn (parameters, plane coordinates, weights): interpolated exactly
 #endif
 out float view_depth;   // c: distance along the face's axis (linear in the triangle: interpolates exactly)
 out float gl_ClipDistance[5];

@@ -1,5 +1,6 @@
-"""Item buffers that draw a flat surface once and find the patch under each pixel (visibility.item_geometry)
-must show what drawing every patch shows: the same patch at every pixel but along shared edges."""
+"""Item buffers that draw a flat surface (or a triangle's grid triangle) once and find the patch under each
+pixel (visibility.item_geometry) must show what drawing every patch shows: the same patch at every pixel
+but along shared edges."""
 
 from __future__ import annotations
 
@@ -15,7 +16,8 @@ from radiosity_addon.core.visibility import hemicube, item_geometry as items
 
 def cut_room():
     """A room of rectangular walls, a trapezoid, a two-sided panel and a triangle, split by size and then cut
-    off-centre twice (as refinement's outline cuts do), so the patches' rectangles do not line up."""
+    off-centre twice (as refinement's outline cuts do), so the patches' rectangles do not line up; the
+    triangle's grid triangles are split into triangles and quads."""
     walls = [surface(f"wall{k}", face[::-1], 0.5, 1.0 if k == 0 else 0.0) for k, face in enumerate(box_faces((0, 0, 0), (4, 3, 2.5)))]
     extra = [surface("trapezoid", [[0.5, 0.5, 0.3], [3.0, 0.5, 0.3], [2.5, 2.0, 0.3], [1.0, 2.0, 0.3]], 0.5, 0.0),
              surface("panel", [[1.0, 2.9, 0.5], [1.0, 1.0, 0.5], [1.0, 1.0, 2.0], [1.0, 2.9, 2.0]], 0.5, 0.0),
@@ -69,32 +71,50 @@ def emulated_lookup(geometry: items.ItemGeometry, look: int, st: np.ndarray) -> 
     return geometry.table[table_offset + j * (cuts[1] - 1) + i]
 
 
-def test_every_patch_centre_is_found_in_its_surfaces_table():
+def test_every_patch_centre_is_found_in_its_units_table():
     scene, patches = cut_room()
     geometry = items.item_geometry(patches)
-    looked_up = items._lookup_surfaces(patches)["surfaces"]
-    # the walls, the panel and the trapezoid (flat, skewed), but not the triangle, nor a surface whose random
-    # cuts come closer than 1 / MAX_BINS
-    assert geometry.looked_up == len(looked_up) >= 6
-    trapezoid, triangle = len(scene) - 3, len(scene) - 1
-    assert trapezoid in looked_up and triangle not in looked_up
-    assert scene.is_triangle[looked_up].sum() == 0
-    skewed = geometry.surfaces[:, 2, 1].astype(bool)
-    assert (looked_up[skewed] == [trapezoid]).all()
-    corner_st = geometry.vertices["st"][-4 * len(looked_up):].reshape(-1, 4, 2)
+    lookup = items._lookup_units(patches)
+    looked_up, unit_of = lookup["units"], lookup["unit_of"]
     fronts = np.arange(patches.front_count)
-    for look, surface_index in enumerate(looked_up):
-        mine = fronts[patches.surface[fronts] == surface_index]
+    unit_surface = np.zeros(unit_of.max() + 1, dtype=np.int64)
+    unit_surface[unit_of] = patches.surface[fronts]
+    # the walls, the panel, the trapezoid (flat, skewed) and the triangle's grid triangles that the random cuts
+    # split (it is split 3 x 3 into 9 by size), but not a surface whose cuts come closer than 1 / MAX_BINS
+    assert geometry.looked_up == len(looked_up) >= 8
+    trapezoid, triangle = len(scene) - 3, len(scene) - 1
+    on_triangle = unit_surface[looked_up] == triangle
+    split_grid_triangles = np.flatnonzero((unit_surface == triangle) & (np.bincount(unit_of) >= 2))
+    assert trapezoid in unit_surface[looked_up] and len(split_grid_triangles) >= 3
+    assert set(looked_up[on_triangle]) == set(split_grid_triangles)
+    maps = geometry.surfaces[:, 2, 1]
+    assert (maps[on_triangle] == items.TRIANGLE_MAP).all() and (maps[~on_triangle] != items.TRIANGLE_MAP).all()
+    assert (unit_surface[looked_up][maps == 1] == [trapezoid]).all()
+    # a grid triangle's corners are those `subdivide` gave its pieces: every piece lies inside it
+    corners = lookup["corners"][on_triangle]
+    assert np.allclose(corners[:, 3], corners[:, 2])
+    corner_st = geometry.vertices["st"][-4 * len(looked_up):].reshape(-1, 4, 2)
+    for look, unit in enumerate(looked_up):
+        mine = fronts[unit_of == unit]
         centres = patches.params[mine].mean(axis=1)
-        if skewed[look]:  # the triangles carry plane coordinates; the shader inverts the bilinear map
+        if maps[look] == 1:  # the triangles carry plane coordinates; the shader inverts the bilinear map
             plane = bilinear_each(np.repeat(corner_st[look][None], len(mine), axis=0), centres[:, 0], centres[:, 1])
             found = emulated_inverse_bilinear(geometry, look, plane)
             assert np.abs(found - centres).max() < 1e-5
             centres = found
+        elif maps[look] == items.TRIANGLE_MAP:  # barycentric weights of the centre's point; s = w1 / (1 - w2)
+            point = bilinear_each(lookup["corners"][look][None].repeat(len(mine), axis=0), centres[:, 0], centres[:, 1])
+            c0, c1, c2 = lookup["corners"][look][:3]
+            w = np.linalg.lstsq(np.stack([c1 - c0, c2 - c0], axis=1), (point - c0).T, rcond=None)[0].T
+            assert np.allclose(bilinear_each(corner_st[look][None].repeat(len(mine), axis=0), centres[:, 0],
+                                             centres[:, 1]), w)
+            found = np.stack([w[:, 0] / (1 - w[:, 1]), w[:, 1]], axis=1)
+            assert np.abs(found - centres).max() < 1e-9
+            centres = found
         assert (emulated_lookup(geometry, look, centres) == mine).all()
-    # the rest is drawn patch by patch: two triangles a quad, one a triangle
-    direct = ~np.isin(patches.surface[fronts], looked_up)
-    drawn = len(geometry.indices) // 3 - 2 * len(looked_up)
+    # the rest is drawn patch by patch: two triangles a quad, one a triangle; a grid triangle is one
+    direct = ~np.isin(unit_of, looked_up)
+    drawn = len(geometry.indices) // 3 - np.where(maps == items.TRIANGLE_MAP, 1, 2).sum()
     assert drawn == np.where(patches.is_triangle[fronts][direct], 1, 2).sum()
 
 

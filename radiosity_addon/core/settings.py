@@ -18,8 +18,10 @@ QUALITIES = ("draft", "good", "final")
 # what each quality sets (the dataclass defaults below are "final"'s but for the hemi-cubes, the
 # finer ones the analytic tests are written for); the bench measures what each
 # costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft 7.4 % in ~12 s,
-# good 6.0 % in ~18 s, final 4.6 % in ~109 s; on the Cornell box 2.4 %, 2.1 % and 2.2 %). final's
-# hemi-cubes are good's: 128 pixels and 2 x 2 per patch made the Cornell box worse (3.2 %) in 21 s.
+# good 6.0 % in ~18 s, final 4.6 % in ~109 s; on the Cornell box 2.4 %, 2.1 % and 2.2 %). The
+# hemi-cubes: 64 pixels, one per patch. 32 pixels gave the Cornell box the same errors in 0.6-0.7 x the
+# time but the emissive-ceiling sample's crate and light 7-9 % under Cycles (tests/test_blender_samples.py);
+# 128 pixels and 2 x 2 per patch made the box worse (3.2 %) in 21 s.
 # Emitter gaps: 4 (patches facing an emitter across a narrow gap split down to a quarter of it)
 # took good from 7.3 to 6.0 % on the room for +22 % time, and from 4.7 to 2.1 % on the box. For
 # draft, 4 gaps need the 3e-2 tolerance: a cavity split finer holds light a 5e-2 one leaves unshot
@@ -63,7 +65,7 @@ class SolveSettings:
     subdiv: int | None = None  # N: every surface split N x N into patches; None: split by patch_size
     patch_size: float = PATCH_SIZE  # with subdiv None: longest patch side in scene units
     elements: int = 4  # S x S elements per patch (progressive), S a power of two
-    hemicube_res: int = 128  # pixels across the hemi-cube's top face (final's: 64)
+    hemicube_res: int = 128  # pixels across the hemi-cube's top face (the presets: 64)
     hemicube_elements: int = 2  # hemi-cube method: S x S receiving elements (hemi-cubes) per patch (final's: 1)
     solver: str = "gauss-seidel"  # fewer sweeps than Jacobi (docs/architecture.md: measured on llvmpipe)
     tolerance: float | None = None  # None: the method's default

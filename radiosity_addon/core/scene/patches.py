@@ -37,7 +37,9 @@ class Patches:
     back_of: np.ndarray | None = None  # (P,) int: the front patch a back patch mirrors, -1 for fronts
     twin: np.ndarray | None = None  # (P,) int: a front patch's back patch, -1 when its back is not simulated
     # where each patch lies in its surface: (P, 2, 2) [(s0, t0), (s1, t1)] of a quad surface's bilinear
-    # map (NaN for a triangle's pieces), and the surfaces' corners (S, 4, 3); None when not known.
+    # map, or for a triangle's pieces of the map of their grid triangle (c0, c1, c2, c2) — refinement's
+    # children are rectangles of it too (NaN: not known); and the surfaces' corners (S, 4, 3), None when
+    # not known.
     # Item buffers draw a surface once and find the patch under each pixel from them (visibility.item_geometry).
     params: np.ndarray | None = None
     surface_corners: np.ndarray | None = None
@@ -221,7 +223,8 @@ def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
             weights = np.concatenate([1 - params.sum(axis=2, keepdims=True), params], axis=2)  # (k, 4, 3)
             corners = np.einsum("kcw,gwd->gkcd", weights, scene.corners[members, :3])
             uv = np.einsum("kcw,gwd->gkcd", weights, scene.uv[members, :3])
-            rects = np.full((len(params), 2, 2), np.nan)  # a triangle's pieces are no rectangles
+            # each piece the whole of its own (degenerate) bilinear map: its children are rectangles of it
+            rects = np.broadcast_to(np.array([[0.0, 0.0], [1.0, 1.0]]), (len(params), 2, 2))
         else:
             params, row, col = quad_grid(int(columns), int(rows))
             corners = bilinear(scene.corners[members], params[..., 0], params[..., 1])

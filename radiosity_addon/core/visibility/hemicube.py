@@ -20,6 +20,7 @@ from .item_geometry import VERTEX_FORMAT, VERTEX_FORMAT_WITHOUT_LOOKUP, item_geo
 
 ATLAS_LIMIT = 4096  # atlas side in pixels (llvmpipe allows 16384; 4096 keeps memory modest)
 NO_PATCH = 0
+ROW_BUFFER_BYTES = 1 << 25  # a batch's coverage rows on the GPU, at most (32 MiB)
 
 
 def delta_form_factors(resolution: int, normalize: bool = True) -> np.ndarray:
@@ -163,8 +164,13 @@ class HemicubeAtlas:
 class HemicubeRenderer(HemicubeAtlas):
     """Hemi-cubes reduced to coverage rows on the GPU: `coverage(frames)` per batch."""
 
-    def __init__(self, res: Resources, patches: Patches, resolution: int, scene_diameter: float):
-        super().__init__(res, patches, resolution, scene_diameter)
+    def __init__(self, res: Resources, patches: Patches, resolution: int, scene_diameter: float,
+                 max_slots: int | None = None):
+        # no more slots than `max_slots`, nor than ROW_BUFFER_BYTES of rows hold: the row
+        # buffer is cleared every batch (8-pixel hemi-cubes fit 87 040 to an atlas: 0.6 GiB of rows at 2k patches)
+        by_rows = max(1, ROW_BUFFER_BYTES // (4 * (len(patches) + 1)))
+        super().__init__(res, patches, resolution, scene_diameter,
+                         by_rows if max_slots is None else max(1, min(max_slots, by_rows)))
         self.reduce = res.gpu.compute("hemicube_form_factor_rows.comp")
         weights = fixed_point_weights(delta_form_factors(resolution))
         self.weight_buffer = res.buffer(weights.tobytes())

@@ -9,11 +9,15 @@ bilinear parameters (s, t) holds the pixel, in a table over the surface's distin
 again by `split_patches`). On a parallelogram (s, t) is affine, so the triangles carry it and
 interpolation gives it exactly; on any other flat quad (a skewed floor) they carry the point's
 coordinates in the quad's plane, affine too, and the shader inverts the bilinear map there (a
-quadratic). The same pixel centre gets the same patch as drawing the patches' own triangles would,
-up to rounding at their shared edges.
+quadratic). A triangle surface is split into grid triangles, and every piece refinement cuts from
+one is a rectangle of that grid triangle's map p(s, t) = (1 - t)((1 - s) c0 + s c1) + t c2, so each
+grid triangle is drawn once the same way: its corners carry barycentric weights (w1, w2), affine,
+and the shader takes s = w1 / (1 - w2), t = w2. The same pixel centre gets the same patch as drawing
+the patches' own triangles would, up to rounding at their shared edges. What is drawn once with a
+table is a "unit": a quad surface, or a grid triangle of a triangle surface.
 
-Everything else (triangles' pieces, bent or concave quads, surfaces of one patch, patches without
-their rectangle) is drawn patch by patch.
+Everything else (bent or concave quads, units of one patch, patches without their rectangle) is
+drawn patch by patch.
 """
 
 from __future__ import annotations
@@ -41,7 +45,9 @@ TABLE_CELLS_PER_PATCH = 16  # a surface whose cut table would hold more cells th
 # room's 128-px `good` shooter maps (0.28) come out even, 256-px probes (< 0.05) lose.
 LOOKUP_PIXELS_PER_TRIANGLE = 0.5
 
-RECORD = 5  # uvec4s per looked-up surface (hemicube_item_buffer.frag)
+RECORD = 5  # uvec4s per looked-up unit (hemicube_item_buffer.frag)
+GRID_ROW_SHIFT = 15  # a grid triangle's unit key: row << 15 | column (columns < 2 n)
+TRIANGLE_MAP = 2  # a record's map: a grid triangle (s = w1 / (1 - w2), t = w2 from barycentric weights)
 VERTEX_FORMAT = "3f 3f 1u 1i 1i 2f"  # position, normal, patch, twin, lookup, (s, t)
 VERTEX_FORMAT_WITHOUT_LOOKUP = "3f 3f 1u 1i 12x"  # the same rows for a shader without the lookup
 VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("lookup", "i4"), ("st", "f4", 2)]
@@ -51,9 +57,10 @@ VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("
 class ItemGeometry:
     vertices: np.ndarray  # VERTEX_DTYPE rows
     indices: np.ndarray  # (3 T,) uint32 triangles
-    surfaces: np.ndarray  # (L, RECORD, 4) uint32 per looked-up surface: (cuts s offset, count, cuts t offset,
-    # count), (bins s offset, count, bins t offset, count), (table offset, skewed, 0, 0), then for a skewed
-    # quad the float32 bits of its bilinear map in plane coordinates (e, f), (g, 0, 0): p = e s + f t + g s t
+    surfaces: np.ndarray  # (L, RECORD, 4) uint32 per looked-up unit: (cuts s offset, count, cuts t offset,
+    # count), (bins s offset, count, bins t offset, count), (table offset, map, 0, 0) with map 0 for a
+    # parallelogram, 1 for a skewed quad, 2 for a grid triangle; then for a skewed quad the float32 bits of
+    # its bilinear map in plane coordinates (e, f), (g, 0, 0): p = e s + f t + g s t
     cuts: np.ndarray  # float32 cut parameters, each surface's s then t, ascending from 0 to 1
     bins: np.ndarray  # uint32 per surface and side, N uniform bins (N a power of two): the last cut at or
     # below each bin's start, so a parameter's cell is that one or the next (a binary search made the
@@ -67,26 +74,26 @@ class ItemGeometry:
 
 
 def item_geometry(patches: Patches, face_pixels: int | None = None) -> ItemGeometry:
-    """The item-buffer geometry of `patches`' fronts: looked-up surfaces as one quad, the rest patch by
-    patch. With `face_pixels` (the pixels of one face of the maps drawn), surfaces are looked up only
+    """The item-buffer geometry of `patches`' fronts: looked-up units drawn once, the rest patch by
+    patch. With `face_pixels` (the pixels of one face of the maps drawn), units are looked up only
     where that saves time (LOOKUP_PIXELS_PER_TRIANGLE); with 0 never."""
     count = patches.front_count
-    lookup = _lookup_surfaces(patches) if face_pixels != 0 else None
+    lookup = _lookup_units(patches) if face_pixels != 0 else None
     if lookup is not None and face_pixels is not None:
-        replaced = np.isin(patches.surface[:count], lookup["surfaces"])
-        saved = int(np.where(patches.is_triangle[:count][replaced], 1, 2).sum()) - 2 * len(lookup["surfaces"])
+        replaced = np.isin(lookup["unit_of"], lookup["units"])
+        drawn = int(np.where(lookup["skewed"] == TRIANGLE_MAP, 1, 2).sum())
+        saved = int(np.where(patches.is_triangle[:count][replaced], 1, 2).sum()) - drawn
         if saved < LOOKUP_PIXELS_PER_TRIANGLE * face_pixels:
             lookup = None
-    surface = patches.surface[:count]
-    direct = np.ones(count, dtype=bool) if lookup is None else ~np.isin(surface, lookup["surfaces"])
+    direct = np.ones(count, dtype=bool) if lookup is None else ~np.isin(lookup["unit_of"], lookup["units"])
     vertices, indices = _patch_geometry(patches, np.flatnonzero(direct))
     twins = patches.twin[:count].astype(np.int32)
     if lookup is None:
         empty = np.zeros((0, RECORD, 4), dtype=np.uint32)
         return ItemGeometry(vertices, indices, empty, np.zeros(1, np.float32), np.zeros(1, np.uint32),
                             np.zeros(1, np.uint32), twins)
-    quads, quad_indices = _surface_geometry(patches.surface_corners[lookup["surfaces"]], lookup["corner_st"],
-                                            len(vertices))
+    quads, quad_indices = _unit_geometry(lookup["corners"], lookup["corner_st"], lookup["skewed"] == TRIANGLE_MAP,
+                                         len(vertices))
     return ItemGeometry(np.concatenate([vertices, quads]), np.concatenate([indices, quad_indices]),
                         lookup["records"], lookup["cuts"], lookup["bins"], lookup["table"], twins)
 
@@ -110,8 +117,9 @@ def _patch_geometry(patches: Patches, rows: np.ndarray) -> tuple[np.ndarray, np.
     return vertices, indices[keep].astype(np.uint32)
 
 
-def _surface_geometry(corners: np.ndarray, corner_st: np.ndarray, first_vertex: int) -> tuple[np.ndarray, np.ndarray]:
-    """Two triangles per looked-up surface, carrying `corner_st` (n, 4, 2) at its corners."""
+def _unit_geometry(corners: np.ndarray, corner_st: np.ndarray, triangle: np.ndarray,
+                   first_vertex: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two triangles per looked-up quad, one per grid triangle, carrying `corner_st` (n, 4, 2) at the corners."""
     count = len(corners)
     area = area_vector(corners)
     vertices = np.empty(count * 4, dtype=VERTEX_DTYPE)
@@ -122,23 +130,56 @@ def _surface_geometry(corners: np.ndarray, corner_st: np.ndarray, first_vertex: 
     vertices["lookup"] = np.repeat(np.arange(count, dtype=np.int32), 4)
     vertices["st"] = corner_st.reshape(-1, 2)
     base = first_vertex + (np.arange(count) * 4)[:, None]
-    return vertices, (base + np.array([0, 1, 2, 0, 2, 3])).ravel().astype(np.uint32)
+    indices = base + np.array([0, 1, 2, 0, 2, 3])
+    keep = np.ones_like(indices, dtype=bool)
+    keep[triangle, 3:] = False  # a grid triangle's second half is empty (c3 repeats c2)
+    return vertices, indices[keep].astype(np.uint32)
 
 
-def _lookup_surfaces(patches: Patches) -> dict | None:
-    """The surfaces drawn once with a patch table, and their records, cuts and tables (None: none can be)."""
-    corners = patches.surface_corners
+def _units(patches: Patches):
+    """Per front patch its unit (what one table serves), and per unit its corners and whether it is a grid
+    triangle: a quad surface is one unit; every grid triangle of a triangle surface (c3 repeating c2) is
+    one, its corners those `subdivide` gave it (scene.patches.triangle_grid)."""
     count = patches.front_count
-    if corners is None or count == 0:
-        return None
     surface = patches.surface[:count].astype(np.int64)
+    corners = patches.surface_corners
+    triangle_surface = (corners[:, 3] == corners[:, 2]).all(axis=1)
+    row, column = patches.grid[:count, 0].astype(np.int64), patches.grid[:count, 1].astype(np.int64)
+    on_triangle = triangle_surface[surface]
+    cell = np.where(on_triangle, 1 + (row << GRID_ROW_SHIFT) + column, 0)
+    unique, unit_of = np.unique((surface << 32) | cell, return_inverse=True)
+    unit_surface, unit_cell = unique >> 32, unique & 0xFFFFFFFF
+    unit_corners = corners[unit_surface].copy()
+    is_grid_triangle = unit_cell > 0
+    if is_grid_triangle.any():
+        n = patches.split[unit_surface[is_grid_triangle], 0][:, None, None]
+        r, c = np.divmod(unit_cell[is_grid_triangle] - 1, 1 << GRID_ROW_SHIFT)
+        i = c // 2
+        # (b1, b2) at the corners: upright (i, r), (i+1, r), (i, r+1); inverted (i+1, r), (i+1, r+1), (i, r+1)
+        odd = (c % 2 == 1)[:, None]
+        b1 = np.where(odd, np.stack([i + 1, i + 1, i, i], 1), np.stack([i, i + 1, i, i], 1))
+        b2 = np.where(odd, np.stack([r, r + 1, r + 1, r + 1], 1), np.stack([r, r, r + 1, r + 1], 1))
+        bary = np.stack([b1, b2], axis=2) / n
+        weights = np.concatenate([1 - bary.sum(axis=2, keepdims=True), bary], axis=2)  # as `subdivide` weighs them
+        unit_corners[is_grid_triangle] = np.einsum("kcw,kwd->kcd", weights,
+                                                   corners[unit_surface[is_grid_triangle], :3])
+    return unit_of.ravel(), unit_corners, is_grid_triangle
+
+
+def _lookup_units(patches: Patches) -> dict | None:
+    """The units drawn once with a patch table (`_units`), and their records, cuts and tables (None: none can be)."""
+    count = patches.front_count
+    if patches.surface_corners is None or count == 0:
+        return None
+    unit_of, corners, is_grid_triangle = _units(patches)
+    surface = unit_of  # the tables below are per unit
     params = patches.params[:count]
     surfaces = len(corners)
     per_surface = np.bincount(surface, minlength=surfaces)
     known = np.isfinite(params).all(axis=(1, 2))
     candidate = (per_surface >= 2) & (np.bincount(surface, weights=~known, minlength=surfaces) == 0)
-    candidate &= _flat_convex_quad(corners)
-    # the patches must be where their rectangles say (the bilinear map of the surface at their corners)
+    candidate &= np.where(is_grid_triangle, np.linalg.norm(area_vector(corners), axis=1) > 0, _flat_convex_quad(corners))
+    # the patches must be where their rectangles say (the bilinear map of the unit at their corners)
     mine = candidate[surface]
     rect_corners = _rectangle_corners(params[mine])
     expected = bilinear_each(corners[surface[mine]], rect_corners[..., 0], rect_corners[..., 1])
@@ -186,9 +227,13 @@ def _lookup_surfaces(patches: Patches) -> dict | None:
     records[:, 0], records[:, 1], records[:, 2, 0] = offsets, bin_offsets, table_offsets
     kept = listed[fits]
     corner_st, skewed, maps = _plane_maps(corners[kept])
+    triangle = is_grid_triangle[kept]
+    corner_st[triangle] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 1.0]]  # barycentric (w1, w2)
+    skewed[triangle] = TRIANGLE_MAP
     records[:, 2, 1] = skewed
     records[:, 3:] = maps.view(np.uint32)
-    return {"surfaces": kept, "records": records, "cuts": cuts, "bins": bins, "table": table, "corner_st": corner_st}
+    return {"units": kept, "unit_of": unit_of, "corners": corners[kept], "skewed": skewed, "records": records,
+            "cuts": cuts, "bins": bins, "table": table, "corner_st": corner_st}
 
 
 def _bin_counts(cuts: dict) -> np.ndarray:
