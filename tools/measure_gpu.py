@@ -35,35 +35,43 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 META_FILE = "measure.json"  # beside the job's own files: which file and run it is
 
 
-def export(args) -> int:
+def export_job(path: Path, run: dict, directory: Path) -> None:
+    """Write the job folder the add-on's bake of `path` (with `run`'s settings, content combined)
+    would hand its solver process into `directory`: the bake's `prepare` (UV maps, export,
+    material probes), then a rollback; nothing is baked."""
     import bpy
 
     from radiosity_addon.blender import bake
     from radiosity_addon.blender.headless import chosen_objects, ensure_registered
     from radiosity_addon.solver_process import protocol
+
+    bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
+    ensure_registered()
+    objects = chosen_objects(None)  # as a headless bake chooses
+    solve = {key: value for key, value in run.items() if key != "lightmaps"}
+    options = bpy.context.scene.radiosity.bake_options(objects).overridden(
+        solve, {**run.get("lightmaps", {}), "content": "combined"})
+    plan = bake.prepare(bpy.context, options, objects=objects, output_dir=directory.parent / "unused")
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        worker = plan.worker
+        protocol.write_job(directory, worker.scene, worker.settings, worker.lightmaps, worker.objects, None)
+    finally:
+        bake.rollback(plan)
+
+
+def export(args) -> int:
     from measure_presets import label_of, with_lightmap_uvs
 
     path, is_room = with_lightmap_uvs(args.file, args.uv_copy_dir / args.file.name)
     for k, text in enumerate(args.runs):
         run = json.loads(text)
-        bpy.ops.wm.open_mainfile(filepath=str(path.resolve()), load_ui=False)
-        ensure_registered()
-        objects = chosen_objects(None)  # as a headless bake chooses
-        solve = {key: value for key, value in run.items() if key != "lightmaps"}
-        options = bpy.context.scene.radiosity.bake_options(objects).overridden(
-            solve, {**run.get("lightmaps", {}), "content": "combined"})
-        plan = bake.prepare(bpy.context, options, objects=objects, output_dir=args.jobs / "unused")
-        try:
-            directory = args.jobs / f"{args.file.stem}-{k}"
-            directory.mkdir(parents=True, exist_ok=True)
-            worker = plan.worker
-            protocol.write_job(directory, worker.scene, worker.settings, worker.lightmaps, worker.objects, None)
-            (directory / META_FILE).write_text(json.dumps({
-                "file": str(path), "label": label_of(run), "run": run, "room": is_room,
-                "reference": args.reference, "cache": str(args.uv_copy_dir / "cache")}))
-            print(f"{directory}: {label_of(run)}")
-        finally:
-            bake.rollback(plan)
+        directory = args.jobs / f"{args.file.stem}-{k}"
+        export_job(path, run, directory)
+        (directory / META_FILE).write_text(json.dumps({
+            "file": str(path), "label": label_of(run), "run": run, "room": is_room,
+            "reference": args.reference, "cache": str(args.uv_copy_dir / "cache")}))
+        print(f"{directory}: {label_of(run)}")
     return 0
 
 
