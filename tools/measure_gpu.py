@@ -75,9 +75,25 @@ def export(args) -> int:
     return 0
 
 
-def solve(args) -> int:
+def solve_job(scene, solve_settings, lightmap_settings, objects) -> dict:
+    """What the solver process does with a job, in an OpenGL context of its own: {"solution",
+    "images" (object: (H, W, 4)), "renderer", "solve" and "lightmaps" (seconds, context excluded)}."""
     from radiosity_addon import core
-    from radiosity_addon.solver_process import child, protocol
+    from radiosity_addon.solver_process import child
+
+    with core.open_gpu() as gpu:
+        opened = time.perf_counter()
+        solution = core.solve(scene, solve_settings, gpu=gpu)
+        solved = time.perf_counter()
+        images = child.lightmap_images(scene, solution, objects, lightmap_settings, gpu)
+        ended = time.perf_counter()
+        renderer = gpu.ctx.info["GL_RENDERER"]
+    return {"solution": solution, "images": images, "renderer": renderer, "solve": solved - opened,
+            "lightmaps": ended - solved}
+
+
+def solve(args) -> int:
+    from radiosity_addon.solver_process import protocol
 
     args.output.mkdir(parents=True, exist_ok=True)
     record = {"machine": {"node": platform.node(), "cpus": __import__("os").cpu_count(),
@@ -87,14 +103,11 @@ def solve(args) -> int:
         for _ in range(args.repeat):
             started = time.perf_counter()
             scene, solve_settings, lightmap_settings, objects, _ = protocol.read_job(directory)
-            with core.open_gpu() as gpu:
-                record["machine"]["renderer"] = gpu.ctx.info["GL_RENDERER"]
-                opened = time.perf_counter()
-                solution = core.solve(scene, solve_settings, gpu=gpu)
-                solved = time.perf_counter()
-                images = child.lightmap_images(scene, solution, objects, lightmap_settings, gpu)
+            solved = solve_job(scene, solve_settings, lightmap_settings, objects)
             ended = time.perf_counter()
-            times.append({"seconds": ended - started, "solve": solved - opened, "lightmaps": ended - solved,
+            solution, images = solved["solution"], solved["images"]
+            record["machine"]["renderer"] = solved["renderer"]
+            times.append({"seconds": ended - started, "solve": solved["solve"], "lightmaps": solved["lightmaps"],
                           "stages": {key: float(value) for key, value in solution.report.timings.items()},
                           "method": solution.report.method, "patches": int(solution.report.counts.patches)})
             print(f"{directory.name}: {times[-1]['seconds']:.2f} s (solve {times[-1]['solve']:.2f} s,"

@@ -1,4 +1,4 @@
-"""Settings against Cycles on a .blend in about a second a run: the solve and the lightmaps run in
+"""Settings against Cycles on a .blend in a second or two a run: the solve and the lightmaps run in
 this process on the job the add-on's bake hands its solver, so a sweep of knobs costs no Blender
 round trip, no solver process start and no image writing per run. For finding where the error
 and the time go; the README's tables are measured whole, with tools/measure_presets.py.
@@ -24,7 +24,6 @@ import argparse
 import dataclasses
 import json
 import sys
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -35,10 +34,9 @@ from radiosity_addon import core  # noqa: E402
 from radiosity_addon.bench import blend_lightmaps, blend_reference, compare  # noqa: E402
 from radiosity_addon.core.settings import QUALITY_PRESETS  # noqa: E402
 from radiosity_addon.solver_process import protocol  # noqa: E402
-from radiosity_addon.solver_process.child import lightmap_images  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from measure_gpu import export_job  # noqa: E402
+from measure_gpu import export_job, solve_job  # noqa: E402
 from measure_presets import label_of, log, with_lightmap_uvs  # noqa: E402
 
 
@@ -56,13 +54,8 @@ def run_once(job, run: dict):
     settings = core.SolveSettings.preset(quality, **overrides)
     lightmaps = dataclasses.replace(lightmap_settings, content="combined",
                                     **(QUALITY_PRESETS[quality]["lightmaps"] | run.get("lightmaps", {})))
-    with core.open_gpu() as gpu:
-        started = time.perf_counter()
-        solution = core.solve(scene, settings, gpu=gpu)
-        solved = time.perf_counter()
-        images = lightmap_images(scene, solution, objects, lightmaps, gpu)
-        finished = time.perf_counter()
-    return solution, images, solved - started, finished - solved
+    solved = solve_job(scene, settings, lightmaps, objects)
+    return solved["solution"], solved["images"], solved["solve"], solved["lightmaps"]
 
 
 def main() -> int:
