@@ -8,23 +8,25 @@ uniform uint back_item;
 out uint out_item;
 
 #if LOOKUP
-flat in int lookup;
+flat in uvec4 unit_cuts;   // the unit's record (hemicube_item_buffer.vert): cuts s offset, count, t offset, count;
+flat in uvec4 unit_bins;   // bins likewise; (table offset, map, g); (e, f) of a skewed quad's map
+flat in uvec4 unit_table;
+flat in vec4 unit_ef;
 flat in uint seen_from_front;
 in vec2 surface_st;  // (s, t) on a parallelogram; on a skewed quad the point in its plane; on a grid
                     // triangle its barycentric weights (w1, w2)
 
-// Units drawn once (visibility/item_geometry.py: quad surfaces, grid triangles): per unit its cut, bin and
-// table offsets; the cut parameters; per bin the cut at or below its start; the patch tables; each front's back twin.
-layout(std430, binding = STORAGE_LOOKUP_SURFACES) readonly buffer Surfaces { uvec4 surface_record[]; };
+// Units drawn once (visibility/item_geometry.py: quad surfaces, grid triangles): the cut parameters; per
+// bin the cut at or below its start; the patch tables; each front's back twin.
 layout(std430, binding = STORAGE_LOOKUP_CUTS) readonly buffer Cuts { float cut[]; };
 layout(std430, binding = STORAGE_LOOKUP_BINS) readonly buffer Bins { uint bin_cut[]; };
 layout(std430, binding = STORAGE_LOOKUP_TABLE) readonly buffer Table { uint table[]; };
 layout(std430, binding = STORAGE_LOOKUP_TWINS) readonly buffer Twins { int twin[]; };
 
-const int RECORD = 5;  // uvec4s per unit
 const uint EMPTY_CELL = 0xFFFFFFFFu;
 const uint SKEWED_QUAD = 1u;     // a record's map (visibility/item_geometry.py): 0 a parallelogram, whose
-const uint GRID_TRIANGLE = 2u;   // (s, t) the vertices carry; 1 a skewed quad; 2 a grid triangle
+const uint GRID_TRIANGLE = 2u;   // (s, t) the vertices carry; 1 a skewed quad; 2 a grid triangle; 3 no
+const uint OWN_TRIANGLES = 3u;   // lookup (a patch's own triangles)
 
 // index i of the cell [cut[first + i], cut[first + i + 1]) holding x: the cut at or below the start of
 // x's uniform bin, or the next one (a bin holds at most one cut inside it)
@@ -61,20 +63,16 @@ vec2 inverse_bilinear(vec2 p, vec2 e, vec2 f, vec2 g) {
 void main() {
     out_item = item;
 #if LOOKUP
-    if (lookup >= 0) {
-        uvec4 cuts = surface_record[lookup * RECORD];
-        uvec4 bins = surface_record[lookup * RECORD + 1];
-        uvec4 table_skewed = surface_record[lookup * RECORD + 2];
+    if (unit_table.y != OWN_TRIANGLES) {
         vec2 st = surface_st;
-        if (table_skewed.y == SKEWED_QUAD) {
-            vec4 ef = uintBitsToFloat(surface_record[lookup * RECORD + 3]);
-            st = inverse_bilinear(surface_st, ef.xy, ef.zw, uintBitsToFloat(surface_record[lookup * RECORD + 4].xy));
-        } else if (table_skewed.y == GRID_TRIANGLE) {  // barycentric (w1, w2) -> (w1 / (1 - w2), w2)
+        if (unit_table.y == SKEWED_QUAD) {
+            st = inverse_bilinear(surface_st, unit_ef.xy, unit_ef.zw, uintBitsToFloat(unit_table.zw));
+        } else if (unit_table.y == GRID_TRIANGLE) {  // barycentric (w1, w2) -> (w1 / (1 - w2), w2)
             st = vec2(surface_st.x / max(1.0 - surface_st.y, 1e-30), surface_st.y);
         }
-        uint i = cell_of(st.x, cuts.x, cuts.y, bins.x, bins.y);
-        uint j = cell_of(st.y, cuts.z, cuts.w, bins.z, bins.w);
-        uint patch_id = table[table_skewed.x + j * (cuts.y - 1u) + i];
+        uint i = cell_of(st.x, unit_cuts.x, unit_cuts.y, unit_bins.x, unit_bins.y);
+        uint j = cell_of(st.y, unit_cuts.z, unit_cuts.w, unit_bins.z, unit_bins.w);
+        uint patch_id = table[unit_table.x + j * (unit_cuts.y - 1u) + i];
         if (patch_id == EMPTY_CELL) discard;
         out_item = seen_from_front != 0u ? patch_id + 1u
                  : (twin[patch_id] >= 0 ? uint(twin[patch_id]) + 1u : back_item);

@@ -11,8 +11,11 @@ in vec3 in_normal;      // the triangle's front normal
 in uint in_patch;       // patch id (a front patch)
 in int in_twin;         // its back patch, -1 when its back is not simulated
 #if LOOKUP
-in int in_lookup;       // -1: the patch's own triangles; else its unit's entry in the patch tables
 in vec2 in_st;          // the unit's parameters at this corner (visibility/item_geometry.py)
+in uvec4 in_cuts;       // the unit's record (item_geometry.unit_record), the same at its every vertex:
+in uvec4 in_bins;       // cuts' and bins' offsets and counts, (table offset, map, g), (e, f); map
+in uvec4 in_table;      // OWN_TRIANGLES for a patch drawn by its own triangles
+in vec4 in_ef;
 #endif
 
 in vec3 in_eye;         // per instance: hemi-cube centre
@@ -30,7 +33,10 @@ uniform uint back_item;  // what the back of a patch writes: it hides the sky bu
 
 flat out uint item;
 #if LOOKUP
-flat out int lookup;
+flat out uvec4 unit_cuts;  // the record, flat: no fragment reads it from memory
+flat out uvec4 unit_bins;
+flat out uvec4 unit_table;
+flat out vec4 unit_ef;
 flat out uint seen_from_front;
 out vec2 surface_st;    // affine over each triangle drawn (parameters, plane coordinates, weights): interpolated exactly
 #endif
@@ -66,7 +72,10 @@ void main() {
     bool front = dot(in_eye - in_position, in_normal) > 0.0;
 #if LOOKUP
     seen_from_front = front ? 1u : 0u;
-    lookup = in_lookup;
+    unit_cuts = in_cuts;
+    unit_bins = in_bins;
+    unit_table = in_table;
+    unit_ef = in_ef;
     surface_st = in_st;
 #endif
     item = front ? in_patch + 1u : (in_twin >= 0 ? uint(in_twin) + 1u : back_item);

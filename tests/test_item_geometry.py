@@ -127,6 +127,27 @@ def test_surfaces_are_looked_up_only_where_they_save_more_triangles_than_a_face_
     assert items.item_geometry(patches, face_pixels=10 ** 7).looked_up == 0
 
 
+def test_every_vertex_carries_its_units_record_and_the_others_no_lookup():
+    _, patches = cut_room()
+    geometry = items.item_geometry(patches)
+    record = geometry.vertices["record"]  # (V, 4, 4): what the vertex shader passes on flat
+    used = np.unique(geometry.indices)
+    own = record[:, 2, 1] == items.OWN_TRIANGLES
+    assert 0 < own[used].sum() < len(used)
+    carried = items.unit_record(geometry.surfaces)
+    # a unit's vertices are its corners: find each looked-up vertex's unit by its record
+    units = [np.flatnonzero((carried == record[v]).all(axis=(1, 2))) for v in np.flatnonzero(~own)]
+    assert all(len(u) == 1 for u in units)
+    unit = np.concatenate(units)
+    assert np.array_equal(np.bincount(unit, minlength=geometry.looked_up), np.full(geometry.looked_up, 4))
+    # the record's fields where the shader reads them: cuts and bins, (table, map, g), (e, f)
+    assert np.array_equal(carried[:, :2], geometry.surfaces[:, :2])
+    assert np.array_equal(carried[:, 2, :2], geometry.surfaces[:, 2, :2])
+    assert np.array_equal(carried[:, 2, 2:], geometry.surfaces[:, 4, :2])
+    assert np.array_equal(carried[:, 3], geometry.surfaces[:, 3])
+    assert (geometry.surfaces[:, 2, 1] != items.OWN_TRIANGLES).all()
+
+
 @pytest.mark.parametrize("resolution", [32, 128])
 def test_looked_up_item_buffers_show_the_patches_drawn_one_by_one(gpu, monkeypatch, resolution):
     scene, patches = cut_room()

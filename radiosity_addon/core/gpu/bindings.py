@@ -17,8 +17,7 @@ STORAGE_GROUPS = {
     "texels": {"TEXEL_POSITION": 0, "TEXEL_NORMAL": 1, "TEXEL_PLANE": 2, "TEXEL_LIGHT": 3,
                "PATCH_PLANE": 6},  # direct light into lightmap texels
     "hemicube": {"DELTA_FORM_FACTORS": 1, "FORM_FACTOR_ROWS": 2},
-    "item_buffer": {"LOOKUP_SURFACES": 0, "LOOKUP_CUTS": 1, "LOOKUP_TABLE": 2, "LOOKUP_TWINS": 3,
-                    "LOOKUP_BINS": 4},  # bound by each draw
+    "item_buffer": {"LOOKUP_CUTS": 1, "LOOKUP_TABLE": 2, "LOOKUP_TWINS": 3, "LOOKUP_BINS": 4},  # bound by each draw
     "jacobi": {"FORM_FACTORS": 0, "JACOBI_EMISSION": 1, "JACOBI_REFLECTANCE": 2, "RADIOSITY_OLD": 3,
                "RADIOSITY_NEW": 4, "CONVERGENCE": 5},
     "lightmap": {"LATTICE_CORNERS": 0, "LATTICE_VALUES": 1},

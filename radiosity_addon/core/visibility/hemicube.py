@@ -118,13 +118,13 @@ class HemicubeAtlas:
         self.vertex_buffer = res.buffer(geometry.vertices.tobytes())
         self.index_buffer = res.buffer(geometry.indices.tobytes())
         self.lookup_buffers = {
-            "LOOKUP_SURFACES": res.buffer(geometry.surfaces.tobytes()),
             "LOOKUP_CUTS": res.buffer(geometry.cuts.tobytes()),
             "LOOKUP_BINS": res.buffer(geometry.bins.tobytes()),
             "LOOKUP_TABLE": res.buffer(geometry.table.tobytes()),
             "LOOKUP_TWINS": res.buffer(geometry.twins.tobytes()),
         } if looked_up else {}
-        vertex_format, attributes = VERTEX_FORMAT, ["in_position", "in_normal", "in_patch", "in_twin", "in_lookup", "in_st"]
+        vertex_format, attributes = VERTEX_FORMAT, ["in_position", "in_normal", "in_patch", "in_twin", "in_st",
+                                                   "in_cuts", "in_bins", "in_table", "in_ef"]
         if not looked_up:
             vertex_format, attributes = VERTEX_FORMAT_WITHOUT_LOOKUP, attributes[:4]
         self.instance_buffer = res.buffer(reserve=self.slots * 5 * 17 * 4)

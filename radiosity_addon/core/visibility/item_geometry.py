@@ -30,7 +30,6 @@ from ..scene import Patches
 from ..scene.geometry import area_vector, bilinear_each
 from ..scene.neighbours import expanded_ranges
 
-DIRECT = -1  # a vertex's `lookup` when it belongs to a patch drawn by its own triangles
 EMPTY_CELL = 0xFFFFFFFF  # a table cell no patch covers (nothing is drawn there)
 PARALLELOGRAM = 1e-6  # of a surface's size: c0 + c2 - c1 - c3 longer than this and it is no parallelogram
 FLAT = 1e-6  # of a surface's size: c3 farther than this from the plane of c0, c1, c2 and it is bent
@@ -45,12 +44,17 @@ TABLE_CELLS_PER_PATCH = 16  # a surface whose cut table would hold more cells th
 # room's 128-px `good` shooter maps (0.28) come out even, 256-px probes (< 0.05) lose.
 LOOKUP_PIXELS_PER_TRIANGLE = 0.5
 
-RECORD = 5  # uvec4s per looked-up unit (hemicube_item_buffer.frag)
+RECORD = 5  # uvec4s per looked-up unit (`ItemGeometry.surfaces`)
 GRID_ROW_SHIFT = 15  # a grid triangle's unit key: row << 15 | column (columns < 2 n)
 TRIANGLE_MAP = 2  # a record's map: a grid triangle (s = w1 / (1 - w2), t = w2 from barycentric weights)
-VERTEX_FORMAT = "3f 3f 1u 1i 1i 2f"  # position, normal, patch, twin, lookup, (s, t)
-VERTEX_FORMAT_WITHOUT_LOOKUP = "3f 3f 1u 1i 12x"  # the same rows for a shader without the lookup
-VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("lookup", "i4"), ("st", "f4", 2)]
+OWN_TRIANGLES = 3  # a vertex's map when it belongs to a patch drawn by its own triangles (no lookup)
+# Every vertex of a unit carries the unit's record (`unit_record`), passed on flat: a fragment then reads
+# only the cuts, bins and table cell it needs. Reading the record per fragment from a storage buffer took
+# half of draft's 64-pixel form factors on the Cornell box (1.10 -> 0.52 s, llvmpipe; the same rows).
+VERTEX_FORMAT = "3f 3f 1u 1i 2f 4u 4u 4u 4f"  # position, normal, patch, twin, (s, t), the unit's record
+VERTEX_FORMAT_WITHOUT_LOOKUP = "3f 3f 1u 1i 72x"  # the same rows for a shader without the lookup
+VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("st", "f4", 2),
+                ("record", "u4", (4, 4))]
 
 
 @dataclass
@@ -93,7 +97,7 @@ def item_geometry(patches: Patches, face_pixels: int | None = None) -> ItemGeome
         return ItemGeometry(vertices, indices, empty, np.zeros(1, np.float32), np.zeros(1, np.uint32),
                             np.zeros(1, np.uint32), twins)
     quads, quad_indices = _unit_geometry(lookup["corners"], lookup["corner_st"], lookup["skewed"] == TRIANGLE_MAP,
-                                         len(vertices))
+                                         unit_record(lookup["records"]), len(vertices))
     return ItemGeometry(np.concatenate([vertices, quads]), np.concatenate([indices, quad_indices]),
                         lookup["records"], lookup["cuts"], lookup["bins"], lookup["table"], twins)
 
@@ -107,8 +111,9 @@ def _patch_geometry(patches: Patches, rows: np.ndarray) -> tuple[np.ndarray, np.
     vertices["n"] = np.repeat(patches.normal[rows], 4, axis=0)
     vertices["id"] = np.repeat(rows.astype(np.uint32), 4)
     vertices["twin"] = np.repeat(patches.twin[rows].astype(np.int32), 4)
-    vertices["lookup"] = DIRECT
     vertices["st"] = 0.0
+    vertices["record"] = 0
+    vertices["record"][:, 2, 1] = OWN_TRIANGLES
     base = (np.arange(count) * 4)[:, None]
     is_triangle = patches.is_triangle[rows]
     indices = np.where(is_triangle[:, None], base + np.array([0, 1, 2, 0, 1, 2]), base + np.array([0, 1, 2, 0, 2, 3]))
@@ -117,9 +122,21 @@ def _patch_geometry(patches: Patches, rows: np.ndarray) -> tuple[np.ndarray, np.
     return vertices, indices[keep].astype(np.uint32)
 
 
-def _unit_geometry(corners: np.ndarray, corner_st: np.ndarray, triangle: np.ndarray,
+def unit_record(records: np.ndarray) -> np.ndarray:
+    """(L, 4, 4) uint32: what a unit's vertices carry of its record (`ItemGeometry.surfaces`): its cuts'
+    and bins' offsets and counts, (table offset, map, g), (e, f) (hemicube_item_buffer.vert)."""
+    carried = np.zeros((len(records), 4, 4), dtype=np.uint32)
+    carried[:, :2] = records[:, :2]
+    carried[:, 2, :2] = records[:, 2, :2]
+    carried[:, 2, 2:] = records[:, 4, :2]
+    carried[:, 3] = records[:, 3]
+    return carried
+
+
+def _unit_geometry(corners: np.ndarray, corner_st: np.ndarray, triangle: np.ndarray, records: np.ndarray,
                    first_vertex: int) -> tuple[np.ndarray, np.ndarray]:
-    """Two triangles per looked-up quad, one per grid triangle, carrying `corner_st` (n, 4, 2) at the corners."""
+    """Two triangles per looked-up quad, one per grid triangle, carrying `corner_st` (n, 4, 2) and the
+    unit's `records` (`unit_record`) at the corners."""
     count = len(corners)
     area = area_vector(corners)
     vertices = np.empty(count * 4, dtype=VERTEX_DTYPE)
@@ -127,8 +144,8 @@ def _unit_geometry(corners: np.ndarray, corner_st: np.ndarray, triangle: np.ndar
     vertices["n"] = np.repeat(area / np.linalg.norm(area, axis=1, keepdims=True), 4, axis=0)
     vertices["id"] = 0
     vertices["twin"] = -1
-    vertices["lookup"] = np.repeat(np.arange(count, dtype=np.int32), 4)
     vertices["st"] = corner_st.reshape(-1, 2)
+    vertices["record"] = np.repeat(records, 4, axis=0)
     base = first_vertex + (np.arange(count) * 4)[:, None]
     indices = base + np.array([0, 1, 2, 0, 2, 3])
     keep = np.ones_like(indices, dtype=bool)
