@@ -15,7 +15,7 @@ the lightmap images with the run's preset and overrides ("lightmaps": {...} for 
 settings), compared texel by texel with Cycles' reference (bench/blend_reference.py, cached in
 DIR/cache: the same cache measure_presets.py fills for the same DIR). Each line gives the solve's
 and the lightmaps' seconds (the best of `--repeat`), the solve's stage timings, the texel RMS and
-every object's mean error. Shader compilation is cached by the driver after the first run.
+every object's mean error and texel RMS. Shader compilation is cached by the driver after the first run.
 """
 
 from __future__ import annotations
@@ -85,11 +85,12 @@ def main() -> int:
         solve_seconds = min(r[2] for r in results)
         lightmap_seconds = min(r[3] for r in results)
         result = compare.compare(images, reference["images"], inside)
-        objects = " ".join(f"{name} {100 * entry['relative_rgb']:+.1f}" for name, entry in result["objects"].items())
+        objects = " ".join(f"{name} {100 * entry['relative_rgb']:+.1f}/{100 * entry['rms']:.1f}"
+                           for name, entry in result["objects"].items())
         stages = " ".join(f"{name} {seconds:.2f}" for name, seconds in solution.report.timings.items() if seconds >= 0.005)
         print(f"{label_of(run)}: {solution.report.method}, {len(solution.patches)} patches; solve {solve_seconds:.2f} s"
               f" + lightmaps {lightmap_seconds:.2f} s; texel RMS {100 * result['texel_rms']:.2f} %"
-              f"\n    objects (mean, %): {objects}\n    stages (s, last run): {stages}", flush=True)
+              f"\n    objects (mean/RMS, %): {objects}\n    stages (s, last run): {stages}", flush=True)
     return 0
 
 
