@@ -43,7 +43,7 @@ def leaked(gpu) -> list[str]:
 
 def lit_room():
     """A closed grey cube lit by a point lamp, a sun through nothing and a world colour: every
-    shooter kind, the sky hemi-cubes and (hemi-cube method) the lamps' direct-light pass."""
+    shooter kind, the sky hemi-cubes and (hemi-cube method) the direct light at the patches' points."""
     data = closed_cube(reflectance=0.5, emission=0.0)
     data["surfaces"].append(surface("block", [[0.4, 0.4, 0.3], [0.6, 0.4, 0.3], [0.6, 0.6, 0.3], [0.4, 0.6, 0.3]],
                                     0.5, 0.0))
@@ -84,7 +84,9 @@ FAILURES = {  # stage -> (settings, object and method to break)
     "shooting pass": (PROGRESSIVE, "radiosity_addon.core.shooting.shooting_pass.ShootingPass.shoot"),
     "sky hemi-cubes": (PROGRESSIVE, "radiosity_addon.core.visibility.hemicube.HemicubeRenderer.coverage"),
     "element readback": (PROGRESSIVE, "radiosity_addon.core.shooting.elements.ElementTextures.read_light"),
-    "lamps into patches": (HEMICUBE, "radiosity_addon.core.shooting.shooting_pass.ShootingPass.shoot"),
+    "refinement's probe": (HEMICUBE, "radiosity_addon.core.shooting.texel_pass.TexelReceivers.shoot"),
+    "direct light at patch points": (replace(HEMICUBE, refinements=0),
+                                     "radiosity_addon.core.shooting.texel_pass.TexelReceivers.shoot"),
     "hemi-cube rows": (HEMICUBE, "radiosity_addon.core.hemicube.form_factors.HemicubeRenderer.coverage"),
     "Jacobi sweeps": (HEMICUBE, "radiosity_addon.core.hemicube.linear_solvers.Convergence.done"),
 }

@@ -58,6 +58,22 @@ def test_single_patch_gives_centre_point_factor(gpu):
     assert matrix[0, 0] == 0 and matrix[1, 1] == 0  # a planar patch cannot see itself
 
 
+@pytest.mark.parametrize("skip_unneeded", [False, True])
+def test_one_patch_takes_the_mean_of_its_direct_light_not_its_centres(gpu, skip_unneeded):
+    """The direct light is measured at 4 x 4 points of the patch, not through its centre's hemi-cube:
+    one unsubdivided receiver under an emitter gets the patch-to-patch factor (0.199825 at distance 1),
+    where the centre-point factor is 20 % more (above). With skips off it is drawn by hemi-cubes, on:
+    nothing occludes, and it is the analytic kernel; either way F carries only the reflected light."""
+    scene = scene_from_dict(opposed_squares(1.0))
+    settings = SolveSettings(method="hemicube", subdiv=1, hemicube_res=64, hemicube_elements=1,
+                             skip_unneeded=skip_unneeded, refinements=0)
+    solution = solve(scene, settings, gpu=gpu)
+    receiver = np.flatnonzero(solution.patches.surface == 0)
+    np.testing.assert_allclose(solution.patch_radiosity[receiver], 0.5 * 0.199825, rtol=0.01)
+    np.testing.assert_allclose(solution.patch_direct[receiver], 0.199825, rtol=0.01)
+    np.testing.assert_allclose(solution.patch_light[receiver], 0.199825, rtol=0.01)
+
+
 def test_closed_cube_rows_sum_to_one(gpu):
     scene = scene_from_dict(closed_cube())
     patches = subdivide(scene, 4)

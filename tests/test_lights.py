@@ -7,7 +7,8 @@ import pytest
 from scenes import surface
 
 from radiosity_addon.core.scene import analyse
-from radiosity_addon.core.shooting import element_centers
+from radiosity_addon.core.hemicube.method import element_means
+from radiosity_addon.core.shooting import element_areas, element_centers
 from radiosity_addon.core import point_to_polygon
 from radiosity_addon.core import SceneError, scene_from_dict
 from radiosity_addon.core import SolveSettings
@@ -56,12 +57,17 @@ def test_point_lamp_on_a_floor_is_exact_at_element_centres(gpu):
 
 
 def test_point_lamp_through_the_hemicube_method(gpu):
-    """The lamp's light at every hemi-cube element centre is the analytic one."""
+    """The lamp's light on every hemi-cube element (2 x 2 a patch) is the analytic one, averaged
+    over the element's 2 x 2 of the 4 x 4 points its patch measures the direct light at."""
     scene = floor_scene([POINT])
-    solution = solve(scene, SolveSettings(method="hemicube", subdiv=4, refinements=0), gpu=gpu)
-    centres = element_centers(solution.patches, solution.element_radiosity.shape[1])
-    expected = point_lamp_radiance(centres.reshape(-1, 3), POINT)
-    np.testing.assert_allclose(solution.element_radiosity.reshape(-1, 3), expected, rtol=2e-3)
+    solution = solve(scene, SolveSettings(method="hemicube", subdiv=4, refinements=0, hemicube_elements=2), gpu=gpu)
+    patches = solution.patches
+    points = element_centers(patches, 4)
+    analytic = point_lamp_radiance(points.reshape(-1, 3), POINT).reshape(len(patches), 4, 4, 3)
+    expected = element_means(analytic, element_areas(patches, 4), 2)
+    np.testing.assert_allclose(solution.element_radiosity, expected, rtol=2e-3)
+    centre_values = point_lamp_radiance(element_centers(patches, 2).reshape(-1, 3), POINT)
+    assert np.abs(centre_values / expected.reshape(-1, 3) - 1).max() > 1e-2  # the mean, not the centre
 
 
 def test_spot_cone_and_blend(gpu):

@@ -21,8 +21,7 @@ import numpy as np
 
 from .scene import Patches, split_patches
 from .scene.gaps import OPPOSED_COSINE, distance_to_outline, facing_partners
-from .shooting import emitter_pieces, lamps_as_shooters, light_at_points
-from .shooting.sky import SKY_HEMICUBE_RESOLUTION, element_frames, sky_fractions
+from .shooting import direct_light_at_elements, patch_scale_shots
 from .uvspace import patch_material_values
 
 REFINE_FLOOR = 0.05
@@ -146,9 +145,8 @@ def within_budget(patches: Patches, priority: np.ndarray, budget: int | None) ->
 
 
 def probe_shooters(scene, patches: Patches, effects, pieces: int = PROBE_PIECES) -> list:
-    """The direct light's shots the probe takes: lamps (an area lamp in up to `pieces` x `pieces`),
-    the sun, and the emitters in about `pieces`² pieces a side."""
-    return lamps_as_shooters(scene, pieces) + emitter_pieces(scene, patches, effects.occlusion, pieces * pieces)
+    """The direct light's shots the probe takes (`shooting.patch_scale_shots`)."""
+    return patch_scale_shots(scene, patches, effects.occlusion, pieces)
 
 
 def probe_light(gpu, scene, patches: Patches, rows: np.ndarray, shooters: list, settings, effects,
@@ -156,15 +154,11 @@ def probe_light(gpu, scene, patches: Patches, rows: np.ndarray, shooters: list, 
     """(len(rows), S, S, 3) direct light H at the S x S element centres of the patches `rows`:
     `shooters` (`probe_shooters`) each with its own visibility, and the world colour times each
     point's sky fraction."""
-    frames = element_frames(patches, elements, rows)
-    points, owners = frames[0], np.repeat(rows, elements * elements)
     with gpu.resources() as res:
-        light = light_at_points(res, scene, patches, points, owners, shooters, settings.visibility,
-                                settings.visibility_res, effects.occlusion, capacity=settings.batch_shots)
-        if np.any(scene.world_color > 0) and len(points):
-            fractions = sky_fractions(res, patches, frames, SKY_HEMICUBE_RESOLUTION, scene.diameter)
-            light = light + fractions[:, None] * scene.world_color
-    return light.reshape(len(rows), elements, elements, 3)
+        light, sky = direct_light_at_elements(res, scene, patches, rows, shooters, settings.visibility,
+                                              settings.visibility_res, effects.occlusion, elements,
+                                              capacity=settings.batch_shots)
+    return light + sky
 
 
 def unchanged_patches(before: Patches, after: Patches) -> np.ndarray:

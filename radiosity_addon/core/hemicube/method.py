@@ -1,6 +1,14 @@
 """The hemi-cube method (the dissertation's original method, §4.1): hemi-cube form factors,
 then a linear solve.
 
+The direct light — lamps, the sun, the emitters' own emission and the sky — is measured on every
+element as the mean over DIRECT_POINTS x DIRECT_POINTS points of each patch (the emitters in pieces,
+each with its own visibility: `shooting.direct_light_at_elements`), and the hemi-cubes carry only
+the light reflected: H = D + F R with R = B − E, so (I − ρF) R = ρ D. A hemi-cube's centre sees an
+emitter as a point sample of its patch: a ceiling patch whose centre lies above a light 5 mm under
+it saw the light's back fill its hemisphere, and sent that into the room (28 patches: the Cornell
+box's walls +1 900 to +3 200 %); the reflected light is smooth, so coarse hemi-cubes carry it well.
+
 Scene analysis (`effects`) trims the work: no hemi-cube for patches that reflect nothing,
 analytic unoccluded form factors instead of hemi-cubes when nothing can occlude, one
 channel for grey scenes, and one gather instead of a linear solve without interreflection.
@@ -15,7 +23,8 @@ import numpy as np
 from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
-from ..shooting import DirectLightWork, direct_light_on_patches, element_areas, has_direct_light, patch_means
+from ..shooting import (DirectLightWork, direct_light_at_elements, element_areas, lamps_as_shooters, patch_means,
+                        patch_scale_shots)
 from ..timing import StageTimer, scaled_progress
 from . import linear_solvers
 from .form_factors import check_memory, element_form_factors, patch_rows
@@ -69,24 +78,50 @@ def as_rgb(radiosity: np.ndarray) -> np.ndarray:
     return np.repeat(radiosity, 3, axis=1) if radiosity.shape[1] == 1 else radiosity
 
 
+DIRECT_POINTS = 4  # points per patch side the direct light is measured at (at least, per element side one)
+
+
+def element_means(values: np.ndarray, areas: np.ndarray, size: int) -> np.ndarray:
+    """(P, S, S, 3) area-weighted means of `values` (P, S k, S k, 3) over k x k blocks (`areas` (P, S k, S k))."""
+    count, k = len(values), values.shape[1] // size
+    weights = areas.reshape(count, size, k, size, k)
+    blocks = values.reshape(count, size, k, size, k, 3)
+    return (blocks * weights[..., None]).sum(axis=(2, 4)) / weights.sum(axis=(2, 4))[..., None]
+
+
+def direct_light(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
+                 size: int) -> tuple[np.ndarray, np.ndarray, DirectLightWork]:
+    """(P, S, S, 3) the light each element gets straight from the lamps, the sun and the emitters,
+    and (the same shape) from the sky: each the mean over the element's share of DIRECT_POINTS x
+    DIRECT_POINTS points of its patch (at least one per element)."""
+    k = -(-DIRECT_POINTS // size)
+    shots = patch_scale_shots(scene, patches, effects.occlusion, settings.probe_pieces)
+    with gpu.resources() as res:
+        light, sky = direct_light_at_elements(res, scene, patches, np.arange(len(patches)), shots, settings.visibility,
+                                              settings.visibility_res, effects.occlusion, size * k,
+                                              capacity=settings.batch_shots)
+    areas = element_areas(patches, size * k)
+    lamp_shots = len(lamps_as_shooters(scene, settings.probe_pieces))
+    work = DirectLightWork(lamps=len(scene.lamps), lamp_visibility_maps=lamp_shots if effects.occlusion else 0,
+                           sky_hemicubes=len(patches) * (size * k) ** 2 if np.any(scene.world_color > 0) else 0,
+                           emitter_pieces=len(shots) - lamp_shots)
+    return element_means(light, areas, size), element_means(sky, areas, size), work
+
+
 def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
                    timer: StageTimer, progress=None, should_cancel=None):
     """(patch radiosity B (P, 3), element radiosity (P, S, S, 3), element light H with B = E + ρH,
     its direct part (lamps and emitters), HemicubeDetails, patch F). Receivers are the S x S
-    elements of every patch (S = hemicube_elements), shooters the patches: H_e = H_lamps + H_sky
-    + F_e B on every element; a patch that reflects nothing gets no rows (with skips on), so its H
-    holds only the lamps' and sky's."""
+    elements of every patch (S = hemicube_elements), shooters the patches: H_e = D_e + F_e R on
+    every element (D: `direct_light`, R = B − E the light the patches reflect); a patch that
+    reflects nothing gets no rows (with skips on), so its H is its direct light alone."""
     size = settings.hemicube_elements
     check_memory(len(patches), settings.memory_limit_bytes, size)
     own_emission = np.asarray(patches.emission, dtype=np.float64)
-    lamp_light = sky_light = np.zeros((len(patches), size, size, 3))
-    direct_work = None
-    if has_direct_light(scene):  # lamps and sky: B = E + ρ (H_lamps + H_sky) + ρ F B
-        with timer.stage("direct_light"), gpu.resources() as res:
-            lamp_light, sky_light, direct_work = direct_light_on_patches(
-                res, scene, patches, settings.visibility, settings.visibility_res, effects.occlusion, size)
+    with timer.stage("direct_light"):
+        direct, sky_light, direct_work = direct_light(gpu, scene, patches, settings, effects, size)
     areas = element_areas(patches, size)
-    emission = own_emission + patches.reflectance * patch_means(areas, lamp_light + sky_light)
+    emission = patches.reflectance * patch_means(areas, direct + sky_light)  # ρ D: the source of R
     reflective = np.flatnonzero(patches.reflectance.max(axis=1) > 0)
     rows = reflective if settings.skip_unneeded else np.arange(len(patches))
     with timer.stage("form_factors"):
@@ -100,17 +135,17 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
         settings.solver, settings.effective_tolerance, settings.max_iterations,
         should_cancel, scaled_progress(progress, 0.8, 1.0),
     )
-    with timer.stage("linear_solve"):
+    with timer.stage("linear_solve"):  # R = B − E: (I − ρF) R = ρ D
         if effects.interreflection:
-            radiosity = linear_solvers.solve_linear(gpu, settings.solver, form_factors, reflectance, emission,
+            reflected = linear_solvers.solve_linear(gpu, settings.solver, form_factors, reflectance, emission,
                                                     monitor)
         else:  # one bounce: light reflected once reaches nothing that reflects again
-            radiosity = emission + reflectance * (form_factors.astype(np.float64) @ emission)
-    radiosity = as_rgb(radiosity)
-    light, direct = lamp_light + sky_light, lamp_light.copy()
+            reflected = emission + reflectance * (form_factors.astype(np.float64) @ emission)
+    reflected = as_rgb(reflected)
+    radiosity = own_emission + reflected
+    light = direct + sky_light
     gathered = element_rows.astype(np.float64)
-    light[rows] += (gathered @ radiosity).reshape(len(rows), size, size, 3)
-    direct[rows] += (gathered @ own_emission).reshape(len(rows), size, size, 3)
+    light[rows] += (gathered @ reflected).reshape(len(rows), size, size, 3)
     elements = own_emission[:, None, None, :] + patches.reflectance[:, None, None, :] * light
     row_sums = form_factors[rows].sum(axis=1, dtype="f8") if len(rows) else np.zeros(1)
     details = HemicubeDetails(

@@ -1,8 +1,11 @@
-"""Light from lamps and the world, shot once into element textures: the piece both methods share.
+"""Light from lamps, the emitters and the world, straight to what receives it: the piece both
+methods share.
 
-Progressive refinement does this before its first patch shot (what receivers reflect of it
-becomes unshot radiosity); the hemi-cube method does it into one-element patches and adds the
-result to its emission term, B = E + ρ·H_lamps + ρ F B.
+Progressive refinement shoots the lamps and the sky into its element textures before its first
+patch shot (what receivers reflect of it becomes unshot radiosity); the hemi-cube method measures
+all of the direct light at points of every patch (`direct_light_at_elements`: lamps, the sun and
+the emitters in pieces, each with its own visibility, and the sky) and solves only for what is
+reflected, (I − ρF) R = ρ D, B = E + R; refinement's probe is the same measurement.
 
 The direct light — lamps, the sun and the emissive patches, not the sky — is also what the
 lightmaps recompute texel by texel (`direct_shooters`, `texel_pass`): the solve records how much
@@ -18,10 +21,9 @@ import numpy as np
 from ..gpu import Resources
 from ..scene import Patches, Scene
 from ..scene.geometry import reversed_corners
-from .elements import ElementTextures
 from .lamps import AREA_LAMP_MAX_SPLIT, lamp_shooters, polygon_shooters
 from .shooters import Shooter
-from .shooting_pass import PatchBuffers, ShootingPass
+from .shooting_pass import ShootingPass
 from .shots import MAX_SHOTS, ShotVisibility
 from .sky import SKY_HEMICUBE_RESOLUTION, element_frames, sky_fractions
 from .texel_pass import TexelReceivers
@@ -33,14 +35,11 @@ class DirectLightWork:
     lamps: int = 0
     lamp_visibility_maps: int = 0
     sky_hemicubes: int = 0
+    emitter_pieces: int = 0  # the hemi-cube method's direct light: the emitters' shots
 
 
 MAX_SPLIT_EMITTERS = 64  # emitting polygons split into pieces for the texel pass; beyond, one shot each
 SOLVE_EMITTER_PIECES = 256  # the solve's element light needs fewer: about this many pieces in all
-
-
-def has_direct_light(scene: Scene) -> bool:
-    return bool(scene.lamps) or bool(np.any(scene.world_color > 0))
 
 
 def lamps_as_shooters(scene: Scene, max_split: int = AREA_LAMP_MAX_SPLIT) -> list[Shooter]:
@@ -144,22 +143,6 @@ def shoot_sky(res: Resources, scene: Scene, patches: Patches, elements: int, sho
         shooting.shoot_sky(sky, fractions)
 
 
-def direct_light_on_patches(res: Resources, scene: Scene, patches: Patches, visibility: str, visibility_res: int,
-                            occlusion: bool, elements: int = 1) -> tuple[np.ndarray, np.ndarray, DirectLightWork]:
-    """(P, S, S, 3) light H each element gets from the lamps, and (P, S, S, 3) from the sky (it
-    reflects ρ · H), for the hemi-cube method's emission term: the shooting pass on S x S elements."""
-    with res.gpu.resources() as scoped:
-        textures = ElementTextures(scoped, patches, elements)
-        buffers = PatchBuffers(scoped, patches, textures)
-        shots = ShotVisibility(scoped, patches, visibility_res, visibility, scene.diameter, occlusion)
-        shooting = ShootingPass(scoped, textures, buffers, "exact", shots)
-        work = shoot_lamps(scene, shooting)
-        lamps = textures.read_light()
-        shoot_sky(scoped, scene, patches, elements, shooting, work)
-        sky = textures.read_light() - lamps
-    return lamps, sky, work
-
-
 def light_at_points(res: Resources, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray,
                     shooters: list[Shooter], visibility: str, resolution: int, occlusion: bool,
                     capacity: int = MAX_SHOTS) -> np.ndarray:
@@ -175,3 +158,27 @@ def light_at_points(res: Resources, scene: Scene, patches: Patches, points: np.n
                                    shots)
         receivers.shoot_all(shooters)
         return receivers.read_light()
+
+
+def patch_scale_shots(scene: Scene, patches: Patches, occlusion: bool, pieces: int) -> list[Shooter]:
+    """The direct light's shots where it is measured on patches (refinement's probe, the hemi-cube
+    method's direct light): lamps (an area lamp in up to `pieces` x `pieces`), the sun, and the
+    emitters in about `pieces`² pieces a side."""
+    return lamps_as_shooters(scene, pieces) + emitter_pieces(scene, patches, occlusion, pieces * pieces)
+
+
+def direct_light_at_elements(res: Resources, scene: Scene, patches: Patches, rows: np.ndarray, shooters: list[Shooter],
+                             visibility: str, visibility_res: int, occlusion: bool, elements: int,
+                             capacity: int = MAX_SHOTS) -> tuple[np.ndarray, np.ndarray]:
+    """(len(rows), S, S, 3) direct light H at the S x S element centres of the patches `rows` from
+    `shooters` (`patch_scale_shots`), each with its own visibility, and (the same shape) from the sky:
+    the world colour times each point's sky fraction."""
+    frames = element_frames(patches, elements, rows)
+    points, owners = frames[0], np.repeat(rows, elements * elements)
+    light = light_at_points(res, scene, patches, points, owners, shooters, visibility, visibility_res, occlusion,
+                            capacity=capacity)
+    sky = np.zeros_like(light)
+    if np.any(scene.world_color > 0) and len(points):
+        sky = sky_fractions(res, patches, frames, SKY_HEMICUBE_RESOLUTION, scene.diameter)[:, None] * scene.world_color
+    shape = (len(rows), elements, elements, 3)
+    return light.reshape(shape), sky.reshape(shape)
