@@ -19,9 +19,11 @@ QUALITIES = ("draft", "good", "final")
 # finer ones the analytic tests are written for); the bench measures what each
 # costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft 7.4 % in ~12 s,
 # good 6.0 % in ~18 s, final 4.6 % in ~109 s; on the Cornell box 2.4 %, 2.1 % and 2.2 %). The
-# hemi-cubes: 64 pixels, one per patch. 32 pixels gave the Cornell box the same errors in 0.6-0.7 x the
-# time but the emissive-ceiling sample's crate and light 7-9 % under Cycles (tests/test_blender_samples.py);
-# 128 pixels and 2 x 2 per patch made the box worse (3.2 %) in 21 s.
+# hemi-cubes: 32 pixels, one per patch. They carry only the reflected light (the direct light is measured
+# at 4 x 4 points a patch: hemicube/method.py), which is smooth: the emissive-ceiling sample's crate is
+# within 1.5 % of Cycles at 16, 32 and 64 pixels (when the hemi-cubes carried the emitters too, 32 pixels
+# left it and its light 6-9 % under), the Cornell box 2.5 % at 32 and 64 pixels, 2.9 % at 16; 128 pixels
+# and 2 x 2 per patch made the box worse (3.2 %) in 21 s.
 # Emitter gaps: 4 (patches facing an emitter across a narrow gap split down to a quarter of it)
 # took good from 7.3 to 6.0 % on the room for +22 % time, and from 4.7 to 2.1 % on the box. For
 # draft, 4 gaps need the 3e-2 tolerance: a cavity split finer holds light a 5e-2 one leaves unshot
@@ -30,19 +32,19 @@ QUALITIES = ("draft", "good", "final")
 # the change per sweep relative to max B.
 QUALITY_PRESETS = {
     "draft": {"solve": {"patch_size": 1.0, "elements": 1, "refinements": 4, "visibility_res": 256,
-                        "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 0.5,
+                        "hemicube_res": 32, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 0.5,
                         "probe_pieces": 4},
               "tolerance": {"progressive": 3e-2, "hemicube": 1e-3},
               "lightmaps": {"direct_map_resolution": 256, "direct_pieces": 2, "direct_subsamples": 2}},
     "good": {"solve": {"patch_size": 1.0, "elements": 1, "refinements": 5, "visibility_res": 256,
-                       "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 0.5,
+                       "hemicube_res": 32, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 0.5,
                        "probe_pieces": 4},
              "tolerance": {"progressive": 2e-2, "hemicube": 1e-5},
              "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 4, "direct_subsamples": 2}},
     # final's probe and texel pass take emitters in 4 x 4 pieces, as good's do: 8 x 8 gave the same error on
     # the 4k room (4.6 %) and the Cornell box (2.2 %) for 24 % more time on the room (README)
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
-                        "hemicube_res": 64, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0,
+                        "hemicube_res": 32, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0,
                         "probe_pieces": 4},
               "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
               "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 4, "direct_subsamples": 4}},
@@ -65,7 +67,7 @@ class SolveSettings:
     subdiv: int | None = None  # N: every surface split N x N into patches; None: split by patch_size
     patch_size: float = PATCH_SIZE  # with subdiv None: longest patch side in scene units
     elements: int = 4  # S x S elements per patch (progressive), S a power of two
-    hemicube_res: int = 128  # pixels across the hemi-cube's top face (the presets: 64)
+    hemicube_res: int = 128  # pixels across the hemi-cube's top face (the presets: 32)
     hemicube_elements: int = 2  # hemi-cube method: S x S receiving elements (hemi-cubes) per patch (final's: 1)
     solver: str = "gauss-seidel"  # fewer sweeps than Jacobi (docs/architecture.md: measured on llvmpipe)
     tolerance: float | None = None  # None: the method's default
