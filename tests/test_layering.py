@@ -39,7 +39,7 @@ ALLOWED = {
     "report": BASE | {"scene", "hemicube", "progressive"},
     "solution": BASE | {"scene", "report"},
     "refinement": BASE | {"gpu", "scene", "uvspace", "shooting"},
-    "method_choice": BASE | {"scene", "shooting", "hemicube"},
+    "method_choice": BASE | {"scene", "visibility", "shooting", "hemicube"},
     "solve": BASE | {"gpu", "scene", "shooting", "uvspace", "hemicube", "progressive", "report", "solution",
               "refinement", "method_choice"},
     "lightmap": BASE | {"gpu", "imaging", "scene", "uvspace", "visibility", "shooting", "solution"},

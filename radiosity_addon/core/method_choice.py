@@ -8,9 +8,11 @@ the patches, or at most `shooter_clusters` when the patches are more (clusters s
 as the unshot light weakens whole coarse clusters shoot: CLUSTERED_SHOTS of the shots per patch
 each; draft on the 3.9k- and 15.8k-triangle rooms, 7 007 and 23 424 patches, took 1 888 and
 1 792 shots, the model says 1 813 for both).
-Hemi-cube method: a hemi-cube per receiving element (S_h^2 per patch), then Jacobi sweeps over
-the P x P matrix (~log(tolerance) / log(mean reflectance) sweeps); its matrices must fit the
-memory limit, else it is not a choice at all.
+Hemi-cube method: a hemi-cube per receiving element (S_h^2 per patch) over the triangles its
+atlas draws (a surface of many patches is drawn once and looked up: visibility/item_geometry.py;
+the 4k room's 7 793 patches are 13 976 triangles, 5 080 drawn), then Jacobi sweeps over the P x P
+matrix (~log(tolerance) / log(mean reflectance) sweeps); its matrices must fit the memory limit,
+else it is not a choice at all.
 """
 
 from __future__ import annotations
@@ -24,10 +26,14 @@ from .hemicube.form_factors import matrix_bytes
 from .scene import Patches
 from .settings import SolveSettings
 from .shooting.shots import hemicube_resolution
+from .visibility.item_geometry import item_geometry
 
 # measured by python -m radiosity_addon.bench.calibrate (2 cores, llvmpipe; load average 5.5, the
 # development machine busy with other jobs: absolute numbers ~2-3x high, their ratios hold)
-HEMICUBE_SECONDS = {"pixel": 4.92e-08, "triangle": 6.43e-08}  # a hemi-cube drawn, reduced, read back
+# a hemi-cube drawn, reduced, read back: measured on the idle machine since the lookup's record rides on
+# the vertices (docs/architecture.md), per pixel on the Cornell box's draft (838 32-px hemi-cubes over 32
+# drawn triangles, 0.34 s), per drawn triangle and face on the 4k room's good (7 793 over 5 080, 17.5 s)
+HEMICUBE_SECONDS = {"pixel": 1.27e-07, "triangle": 7.3e-08}
 SHOT_SECONDS = {"pixel": 5.18e-09, "triangle": 1.21e-07, "element": 3.4e-07}  # a progressive shot
 SECONDS_PER_MATRIX_ENTRY_SWEEP = 3.93e-09
 SHOTS_PER_PATCH = {0.01: 2.62, 0.003: 3.56, 0.001: 4.40}  # progressive, Cornell box, by tolerance
@@ -87,9 +93,14 @@ def predict_progressive(patches: Patches, settings: SolveSettings, shooters: int
     return Prediction(seconds=seconds, bytes=elements * ELEMENT_BYTES)
 
 
+def drawn_triangles(patches: Patches, resolution: int) -> int:
+    """The triangles a hemi-cube atlas of top face `resolution` draws of these patches."""
+    return len(item_geometry(patches, face_pixels=resolution * resolution * 3 // 5).indices) // 3
+
+
 def predict_hemicube(patches: Patches, settings: SolveSettings, mean_reflectance: float) -> Prediction:
     count = len(patches)
-    triangles = int(np.where(patches.is_triangle, 1, 2).sum())
+    triangles = drawn_triangles(patches, settings.hemicube_res)
     need = matrix_bytes(count, settings.hemicube_elements)
     tolerance = replace(settings, method="hemicube").effective_tolerance
     sweeps = math.log(tolerance) / math.log(min(max(mean_reflectance, 0.05), 0.99))
