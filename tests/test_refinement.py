@@ -178,3 +178,32 @@ def test_each_round_probes_only_the_patches_it_made_and_the_probe_is_the_ray_cas
     np.testing.assert_array_equal(after.corners[kept], patches.corners[of[kept]])
     again = probe_light(gpu, scene, after, kept, probe_shooters(scene, after, effects), settings, effects, 4)
     np.testing.assert_allclose(again, light[of[kept]], atol=1e-3 * exact.max())
+
+
+def test_the_hemicube_method_measures_only_the_direct_light_refinement_did_not(gpu, monkeypatch):
+    """Refinement hands on the direct light it measured; the hemi-cube method measures the patches
+    its last round made and takes the rest: the same light as measuring every patch again."""
+    from radiosity_addon.core.hemicube import method
+    from radiosity_addon.core.refinement import refine
+    from radiosity_addon.core.timing import StageTimer
+
+    scene = scene_from_dict(light_under_ceiling(0.01))
+    effects, backs = effects_for(scene, True)
+    settings = SolveSettings(method="hemicube", patch_size=0.5, elements=1, hemicube_elements=1, refinements=2,
+                             probe_pieces=4)
+    patches, refined, measured = refine(gpu, scene, subdivide(scene, None, 0.5, backs), backs, settings, effects,
+                                        StageTimer())
+    assert len(refined) == 2 and 0 < (~measured.known).sum() < len(patches) and measured.elements == 4
+    measured_rows = []
+    original = method.direct_light_at_elements
+    monkeypatch.setattr(method, "direct_light_at_elements",
+                        lambda res, scene, patches, rows, *rest, **kw: measured_rows.append(rows) or original(
+                            res, scene, patches, rows, *rest, **kw))
+    again = method.direct_light(gpu, scene, patches, settings, effects, 1)
+    taken = method.direct_light(gpu, scene, patches, settings, effects, 1, measured)
+    np.testing.assert_array_equal(measured_rows[0], np.arange(len(patches)))
+    np.testing.assert_array_equal(measured_rows[1], np.flatnonzero(~measured.known))
+    scale = again[0].max()
+    assert scale > 0
+    np.testing.assert_allclose(taken[0], again[0], atol=1e-4 * scale)
+    np.testing.assert_allclose(taken[1], again[1], atol=1e-4 * scale)

@@ -21,7 +21,7 @@ import numpy as np
 
 from .scene import Patches, split_patches
 from .scene.gaps import OPPOSED_COSINE, distance_to_outline, facing_partners
-from .shooting import direct_light_at_elements, patch_scale_shots
+from .shooting import MeasuredDirectLight, direct_light_at_elements, patch_scale_shots, same_shots
 from .uvspace import patch_material_values
 
 REFINE_FLOOR = 0.05
@@ -149,16 +149,20 @@ def probe_shooters(scene, patches: Patches, effects, pieces: int = PROBE_PIECES)
     return patch_scale_shots(scene, patches, effects.occlusion, pieces)
 
 
+def probe_direct(gpu, scene, patches: Patches, rows: np.ndarray, shooters: list, settings, effects,
+                 elements: int) -> tuple[np.ndarray, np.ndarray]:
+    """(len(rows), S, S, 3) direct light H at the S x S element centres of the patches `rows` from
+    `shooters` (`probe_shooters`) each with its own visibility, and (the same shape) from the sky."""
+    with gpu.resources() as res:
+        return direct_light_at_elements(res, scene, patches, rows, shooters, settings.visibility,
+                                        settings.visibility_res, effects.occlusion, elements,
+                                        capacity=settings.batch_shots)
+
+
 def probe_light(gpu, scene, patches: Patches, rows: np.ndarray, shooters: list, settings, effects,
                 elements: int) -> np.ndarray:
-    """(len(rows), S, S, 3) direct light H at the S x S element centres of the patches `rows`:
-    `shooters` (`probe_shooters`) each with its own visibility, and the world colour times each
-    point's sky fraction."""
-    with gpu.resources() as res:
-        light, sky = direct_light_at_elements(res, scene, patches, rows, shooters, settings.visibility,
-                                              settings.visibility_res, effects.occlusion, elements,
-                                              capacity=settings.batch_shots)
-    return light + sky
+    """The sum of `probe_direct`'s two parts: all the direct light H at those points."""
+    return sum(probe_direct(gpu, scene, patches, rows, shooters, settings, effects, elements))
 
 
 def unchanged_patches(before: Patches, after: Patches) -> np.ndarray:
@@ -175,14 +179,10 @@ def unchanged_patches(before: Patches, after: Patches) -> np.ndarray:
     return of_code[code[len(before):]]
 
 
-def same_shots(a: list, b: list) -> bool:
-    return len(a) == len(b) and all(
-        np.array_equal(x.polygon, y.polygon) and np.array_equal(x.radiosity, y.radiosity) for x, y in zip(a, b))
-
-
 def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
-           budget: int | None = None) -> tuple[Patches, list[int]]:
-    """`patches` split where the direct light changes fast, and how many were split per round;
+           budget: int | None = None) -> tuple[Patches, list[int], MeasuredDirectLight | None]:
+    """`patches` split where the direct light changes fast, how many were split per round, and the
+    direct light the last round measured, on the patches it left alone (None without rounds);
     never more than `budget` patches in all (the hemi-cube method's matrices must fit). The splits
     of the spread rule add at most `settings.refine_budget` times the patches there were (at least
     REFINE_MIN_PATCHES), largest first, so refinement grows linearly with the scene; the gap rule's
@@ -192,18 +192,20 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
     elements = max(settings.elements, PROBE_ELEMENTS)
     spread_room = max(int(settings.refine_budget * len(patches)), REFINE_MIN_PATCHES)
     refined = []
-    light = shooters = None
+    shots_light = sky_light = shooters = light_of = None
     for level in range(settings.refinements):
         with timer.stage("refine"):
             now_shooting = probe_shooters(scene, patches, effects, settings.probe_pieces)
-            if light is None or not same_shots(shooters, now_shooting):
-                light = probe_light(gpu, scene, patches, np.arange(len(patches)), now_shooting, settings, effects,
-                                    elements)
+            if shots_light is None or not same_shots(shooters, now_shooting):
+                shots_light, sky_light = probe_direct(gpu, scene, patches, np.arange(len(patches)), now_shooting,
+                                                      settings, effects, elements)
             else:
                 fresh = np.flatnonzero(light_of < 0)
-                light = np.where((light_of >= 0)[:, None, None, None], light[np.maximum(light_of, 0)], 0.0)
-                light[fresh] = probe_light(gpu, scene, patches, fresh, now_shooting, settings, effects, elements)
-            shooters = now_shooting
+                shots_light, sky_light = (kept(values, light_of) for values in (shots_light, sky_light))
+                shots_light[fresh], sky_light[fresh] = probe_direct(gpu, scene, patches, fresh, now_shooting, settings,
+                                                                    effects, elements)
+            shooters, light_of = now_shooting, None
+            light = shots_light + sky_light
             min_size = SMALLEST_PATCH * scene.diameter
             priority, cuts = patches_to_refine(patches, light, settings.refine_threshold, min_size, scene.corners,
                                          settings.emitter_gap_resolution)
@@ -218,4 +220,15 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
             light_of = unchanged_patches(before, patches)
             if scene.material_maps:
                 patches.reflectance, patches.emission = patch_material_values(gpu, scene, patches)
-    return patches, refined
+    if shots_light is None:
+        return patches, refined, None
+    known = np.ones(len(patches), dtype=bool) if light_of is None else light_of >= 0
+    if light_of is not None:
+        shots_light, sky_light = (kept(values, light_of) for values in (shots_light, sky_light))
+    return patches, refined, MeasuredDirectLight(shots_light, sky_light, known, shooters, elements)
+
+
+def kept(values: np.ndarray, light_of: np.ndarray) -> np.ndarray:
+    """`values` of the patches before a split, taken over by those it left alone (`unchanged_patches`);
+    zeros for the new ones."""
+    return np.where((light_of >= 0)[:, None, None, None], values[np.maximum(light_of, 0)], 0.0)

@@ -52,13 +52,13 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
         if settings.method == "hemicube":  # refuse before any GPU work; refinement stays within the matrices' memory
             check_memory(len(patches), settings.memory_limit_bytes, settings.hemicube_elements)
             budget = patch_budget(settings.memory_limit_bytes, settings.hemicube_elements)
-        patches, refined = refine(solve_gpu, scene, patches, backs, settings, effects, timer, budget)
+        patches, refined, measured = refine(solve_gpu, scene, patches, backs, settings, effects, timer, budget)
         choice = None
         if settings.method == "auto":
             choice = choose_method(patches, settings)
             settings = replace(settings, method=choice.method)
         result = _solve_patches(solve_gpu, scene, patches, settings, effects, timer, progress, should_cancel,
-                                preview, preview_interval)
+                                preview, preview_interval, measured)
     radiosity, elements, light, element_light, direct, element_direct, details = result
     timer.timings["total"] = time.perf_counter() - started
     element_count = len(patches) * elements.shape[1] ** 2
@@ -75,13 +75,13 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
 
 
 def _solve_patches(gpu: GPU, scene: Scene, patches, settings: SolveSettings, effects, timer: StageTimer, progress,
-                   should_cancel, preview, preview_interval):
+                   should_cancel, preview, preview_interval, measured=None):
     """One method's solve on these patches: (B, element B, H, element H, direct H, element direct H,
     details); element arrays (P, S, S, 3), or for the hemi-cube method's one value per patch the
-    patch arrays as 1 x 1 elements."""
+    patch arrays as 1 x 1 elements. `measured`: refinement's probe of the direct light."""
     if settings.method == "hemicube":
         radiosity, elements, element_light, element_direct, details, _ = solve_hemicube(
-            gpu, scene, patches, settings, effects, timer, progress, should_cancel)
+            gpu, scene, patches, settings, effects, timer, progress, should_cancel, measured)
         areas = element_areas(patches, settings.hemicube_elements)
         return (radiosity, elements, patch_means(areas, element_light), element_light,
                 patch_means(areas, element_direct), element_direct, details)

@@ -23,8 +23,8 @@ import numpy as np
 from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
-from ..shooting import (DirectLightWork, direct_light_at_elements, element_areas, lamps_as_shooters, patch_means,
-                        patch_scale_shots)
+from ..shooting import (DirectLightWork, MeasuredDirectLight, direct_light_at_elements, element_areas,
+                        lamps_as_shooters, patch_means, patch_scale_shots, same_shots)
 from ..timing import StageTimer, scaled_progress
 from . import linear_solvers
 from .form_factors import check_memory, element_form_factors, patch_rows
@@ -90,16 +90,26 @@ def element_means(values: np.ndarray, areas: np.ndarray, size: int) -> np.ndarra
 
 
 def direct_light(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
-                 size: int) -> tuple[np.ndarray, np.ndarray, DirectLightWork]:
+                 size: int, measured: MeasuredDirectLight | None = None) -> tuple[np.ndarray, np.ndarray, DirectLightWork]:
     """(P, S, S, 3) the light each element gets straight from the lamps, the sun and the emitters,
     and (the same shape) from the sky: each the mean over the element's share of DIRECT_POINTS x
-    DIRECT_POINTS points of its patch (at least one per element)."""
+    DIRECT_POINTS points of its patch (at least one per element). What refinement `measured` at
+    those points with these shots is taken, and only the rest measured."""
     k = -(-DIRECT_POINTS // size)
     shots = patch_scale_shots(scene, patches, effects.occlusion, settings.probe_pieces)
-    with gpu.resources() as res:
-        light, sky = direct_light_at_elements(res, scene, patches, np.arange(len(patches)), shots, settings.visibility,
-                                              settings.visibility_res, effects.occlusion, size * k,
-                                              capacity=settings.batch_shots)
+    rows, light, sky = np.arange(len(patches)), None, None
+    if (measured is not None and measured.elements == size * k and len(measured.known) == len(patches)
+            and same_shots(measured.shooters, shots)):
+        rows, light, sky = np.flatnonzero(~measured.known), measured.shots.copy(), measured.sky.copy()
+    if len(rows):
+        with gpu.resources() as res:
+            more = direct_light_at_elements(res, scene, patches, rows, shots, settings.visibility,
+                                            settings.visibility_res, effects.occlusion, size * k,
+                                            capacity=settings.batch_shots)
+        if light is None:
+            light, sky = more
+        else:
+            light[rows], sky[rows] = more
     areas = element_areas(patches, size * k)
     lamp_shots = len(lamps_as_shooters(scene, settings.probe_pieces))
     work = DirectLightWork(lamps=len(scene.lamps), lamp_visibility_maps=lamp_shots if effects.occlusion else 0,
@@ -109,17 +119,18 @@ def direct_light(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettin
 
 
 def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
-                   timer: StageTimer, progress=None, should_cancel=None):
+                   timer: StageTimer, progress=None, should_cancel=None, measured: MeasuredDirectLight | None = None):
     """(patch radiosity B (P, 3), element radiosity (P, S, S, 3), element light H with B = E + ρH,
     its direct part (lamps and emitters), HemicubeDetails, patch F). Receivers are the S x S
     elements of every patch (S = hemicube_elements), shooters the patches: H_e = D_e + F_e R on
     every element (D: `direct_light`, R = B − E the light the patches reflect); a patch that
-    reflects nothing gets no rows (with skips on), so its H is its direct light alone."""
+    reflects nothing gets no rows (with skips on), so its H is its direct light alone. `measured`:
+    refinement's probe of the direct light (`direct_light`)."""
     size = settings.hemicube_elements
     check_memory(len(patches), settings.memory_limit_bytes, size)
     own_emission = np.asarray(patches.emission, dtype=np.float64)
     with timer.stage("direct_light"):
-        direct, sky_light, direct_work = direct_light(gpu, scene, patches, settings, effects, size)
+        direct, sky_light, direct_work = direct_light(gpu, scene, patches, settings, effects, size, measured)
     areas = element_areas(patches, size)
     emission = patches.reflectance * patch_means(areas, direct + sky_light)  # ρ D: the source of R
     reflective = np.flatnonzero(patches.reflectance.max(axis=1) > 0)

@@ -182,3 +182,20 @@ def direct_light_at_elements(res: Resources, scene: Scene, patches: Patches, row
         sky = sky_fractions(res, patches, frames, SKY_HEMICUBE_RESOLUTION, scene.diameter)[:, None] * scene.world_color
     shape = (len(rows), elements, elements, 3)
     return light.reshape(shape), sky.reshape(shape)
+
+
+@dataclass
+class MeasuredDirectLight:
+    """Direct light measured at the S x S element centres of every patch (refinement's probe), for
+    the hemi-cube method to take instead of measuring it again: from `shooters` and from the sky,
+    (P, S, S, 3) each; `known` (P,) False for patches made after the last measurement."""
+    shots: np.ndarray
+    sky: np.ndarray
+    known: np.ndarray
+    shooters: list
+    elements: int
+
+
+def same_shots(a: list[Shooter], b: list[Shooter]) -> bool:
+    return len(a) == len(b) and all(
+        np.array_equal(x.polygon, y.polygon) and np.array_equal(x.radiosity, y.radiosity) for x, y in zip(a, b))
