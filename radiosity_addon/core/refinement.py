@@ -159,11 +159,6 @@ def probe_direct(gpu, scene, patches: Patches, rows: np.ndarray, shooters: list,
                                         capacity=settings.batch_shots)
 
 
-def probe_light(gpu, scene, patches: Patches, rows: np.ndarray, shooters: list, settings, effects,
-                elements: int) -> np.ndarray:
-    """The sum of `probe_direct`'s two parts: all the direct light H at those points."""
-    return sum(probe_direct(gpu, scene, patches, rows, shooters, settings, effects, elements))
-
 
 def unchanged_patches(before: Patches, after: Patches) -> np.ndarray:
     """(len(after),) the patch of `before` each patch of `after` is (same surface, side and
