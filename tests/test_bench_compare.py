@@ -54,6 +54,28 @@ def test_relative_noise():
     assert compare.relative_noise(noise, REFERENCE, texels) == pytest.approx(np.sqrt(0.05 / 32))
 
 
+def test_object_balanced_rms_weighs_each_object_by_its_texels_not_its_brightness():
+    texels = compare.common_texels(OURS, REFERENCE)
+    # A: E = 1 / 28 over 2 texels; B: E = 1 / 4 over 1 texel (the plain texel RMS: sqrt(2 / 32))
+    assert compare.object_balanced_rms(OURS, REFERENCE, texels) == pytest.approx(np.sqrt((2 / 28 + 1 / 4) / 3))
+    bright = {name: image * np.array([10.0, 10.0, 10.0, 1.0]) if name == "A" else image
+              for name, image in REFERENCE.items()}
+    brighter_ours = {name: OURS[name] * np.array([10.0, 10.0, 10.0, 1.0]) if name == "A" else OURS[name]
+                     for name in OURS}  # A ten times as bright, its error too: no change balanced
+    assert compare.object_balanced_rms(brighter_ours, bright, texels) == pytest.approx(np.sqrt((2 / 28 + 1 / 4) / 3))
+    assert compare.texel_relative_rms(brighter_ours, bright, texels) == pytest.approx(np.sqrt(101 / 2804))
+
+
+def test_object_balanced_rms_takes_the_references_noise_out():
+    texels = compare.common_texels(OURS, REFERENCE)
+    noise = {"A": image((0.5, 0, 0, 1), (0, 0.5, 0, 1)), "B": image((0, 0, 0, 0), (2, 0, 0, 1))}
+    # A: 1 − 0.5 = 0.5 against 28; B: 1 − 4 < 0 leaves 0
+    assert compare.object_balanced_rms(OURS, REFERENCE, texels, noise) == pytest.approx(np.sqrt(2 * 0.5 / 28 / 3))
+    result = compare.compare(OURS, REFERENCE, noise=noise)
+    assert result["balanced_bias"] == pytest.approx(np.sqrt(2 * 0.5 / 28 / 3))
+    assert result["balanced_rms"] == pytest.approx(np.sqrt((2 / 28 + 1 / 4) / 3))
+
+
 def test_sizes_must_match():
     with pytest.raises(ValueError, match="bake the reference at our sizes"):
         compare.common_texels({"A": np.zeros((2, 2, 4))}, {"A": np.zeros((2, 3, 4))})

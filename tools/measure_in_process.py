@@ -84,12 +84,13 @@ def main() -> int:
         solution, images, _, _ = results[-1]
         solve_seconds = min(r[2] for r in results)
         lightmap_seconds = min(r[3] for r in results)
-        result = compare.compare(images, reference["images"], inside)
+        result = compare.compare(images, reference["images"], inside, noise=reference["noise"])
         objects = " ".join(f"{name} {100 * entry['relative_rgb']:+.1f}/{100 * entry['rms']:.1f}"
                            for name, entry in result["objects"].items())
         stages = " ".join(f"{name} {seconds:.2f}" for name, seconds in solution.report.timings.items() if seconds >= 0.005)
         print(f"{label_of(run)}: {solution.report.method}, {len(solution.patches)} patches; solve {solve_seconds:.2f} s"
-              f" + lightmaps {lightmap_seconds:.2f} s; texel RMS {100 * result['texel_rms']:.2f} %"
+              f" + lightmaps {lightmap_seconds:.2f} s; texel RMS {100 * result['texel_rms']:.2f} %; object-balanced"
+              f" {100 * result['balanced_rms']:.2f} %, its noise out {100 * result['balanced_bias']:.2f} %"
               f"\n    objects (mean/RMS, %): {objects}\n    stages (s, last run): {stages}", flush=True)
     return 0
 

@@ -12,7 +12,9 @@ settings and the run's replaced (content: combined, B), timed as a whole; the re
 Combined bake at `--reference` samples per seed, two seeds (bench/blend_reference.py, cached in
 DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, timed when baked. The comparison
 (bench/compare.py) gives the texel RMS over all texels and over those inside the room (a room of
-bench/rooms.py; elsewhere the same), and the worst object's mean. `--densities` then times the
+bench/rooms.py; elsewhere the same), the object-balanced RMS (each object's error relative to its
+own brightness, counted by its texels) and that with the reference's noise taken out, and the
+worst object's mean. `--densities` then times the
 first run and Cycles at the first `--cycles` samples at other texel densities. Writes
 DIR/presets.json and DIR/presets.png (error against time; `--replot` redraws it from the json).
 """
@@ -78,35 +80,43 @@ def density_sweep(path: Path, run: dict, samples: int, densities: list[float], o
     return rows
 
 
+METRICS = (("texel_rms", "texel relative RMS, %"),
+           ("balanced_bias", "object-balanced RMS, reference noise out, %"))
+
+
 def plot(path: Path, record: dict) -> None:
-    """Texel error against the bake's seconds: our runs as points, Cycles' as a line through its
-    sample counts (its error falls as 1/sqrt(samples), its time grows with them)."""
+    """Error against the bake's seconds, one panel per metric (compare.py: the texel RMS, which a
+    scene's brightest texels decide, and the object-balanced RMS without the reference's noise):
+    our runs as points, Cycles' as a line through its sample counts (its error falls as
+    1/sqrt(samples), its time grows with them)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import matplotlib.ticker
 
-    figure, axis = plt.subplots(figsize=(6.4, 4.4))
+    metrics = [(key, label) for key, label in METRICS if all(key in run for run in record["runs"])]
+    figure, axes = plt.subplots(1, len(metrics), figsize=(6.0 * len(metrics), 4.4), squeeze=False)
     cycles = sorted((run for run in record["runs"] if run["method"] == "cycles"), key=lambda run: run["seconds"])
-    if cycles:
-        axis.plot([run["seconds"] for run in cycles], [100 * run["texel_rms"] for run in cycles], "-.D", color="grey",
-                  label="Cycles")
-        for run in cycles:
-            axis.annotate(run["label"].replace("Cycles ", ""), (run["seconds"], 100 * run["texel_rms"]), fontsize=7,
-                          xytext=(4, 4), textcoords="offset points")
-    for run in (run for run in record["runs"] if run["method"] != "cycles"):
-        axis.plot(run["seconds"], 100 * run["texel_rms"], "o", label=f"{run['label']} ({run['method']})")
-    axis.set_xscale("log")
-    axis.set_yscale("log")
-    for ticks in (axis.xaxis, axis.yaxis):  # plain numbers, not powers of ten
-        ticks.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
-        ticks.set_minor_formatter(matplotlib.ticker.FuncFormatter(
-            lambda value, _: f"{value:g}" if f"{value:e}"[0] in "235" else ""))
-    axis.set_xlabel("seconds, whole bake (2 cores, llvmpipe)")
-    axis.set_ylabel("texel relative RMS against Cycles' reference, %")
-    axis.set_title(Path(record["file"]).name)
-    axis.grid(True, which="both", alpha=0.3)
-    axis.legend(fontsize=7)
+    for axis, (key, label) in zip(axes[0], metrics):
+        if cycles:
+            axis.plot([run["seconds"] for run in cycles], [100 * run[key] for run in cycles], "-.D", color="grey",
+                      label="Cycles")
+            for run in cycles:
+                axis.annotate(run["label"].replace("Cycles ", ""), (run["seconds"], 100 * run[key]), fontsize=7,
+                              xytext=(4, 4), textcoords="offset points")
+        for run in (run for run in record["runs"] if run["method"] != "cycles"):
+            axis.plot(run["seconds"], 100 * run[key], "o", label=f"{run['label']} ({run['method']})")
+        axis.set_xscale("log")
+        axis.set_yscale("log")
+        for ticks in (axis.xaxis, axis.yaxis):  # plain numbers, not powers of ten
+            ticks.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+            ticks.set_minor_formatter(matplotlib.ticker.FuncFormatter(
+                lambda value, _: f"{value:g}" if f"{value:e}"[0] in "235" else ""))
+        axis.set_xlabel("seconds, whole bake (2 cores, llvmpipe)")
+        axis.set_ylabel(f"{label} against Cycles' reference")
+        axis.set_title(Path(record["file"]).name)
+        axis.grid(True, which="both", alpha=0.3)
+        axis.legend(fontsize=7)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
 
@@ -155,25 +165,30 @@ def main() -> int:
     inside = blend_lightmaps.inside_room(positions) if is_room else None
     texels = compare.common_texels(reference["images"], reference["images"], inside)
     record["reference"] = {"samples_per_seed": args.reference,
-                           "noise": compare.relative_noise(reference["noise"], reference["images"], texels)}
+                           "noise": compare.relative_noise(reference["noise"], reference["images"], texels),
+                           "balanced_noise": compare.object_balanced_rms(  # of the noise itself: ours = ref + noise
+                               {k: v + reference["noise"][k] for k, v in reference["images"].items()},
+                               reference["images"], texels)}
     rows = [(entry, lightmaps[k]) for k, entry in enumerate(record["runs"])]
     for samples in args.cycles:
         bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, 1, out / "cache")
         entry = {"label": f"Cycles {samples} samples", "seconds": bake["seconds"], "method": "cycles"}
         record["runs"].append(entry)
         rows.append((entry, bake["images"]))
-    print(f"reference: Cycles {args.reference} samples x 2 seeds, noise {100 * record['reference']['noise']:.1f} %")
-    print("| run | method | patches | seconds | texel RMS all / inside | worst object mean |")
-    print("|---|---|---:|---:|---:|---|")
+    print(f"reference: Cycles {args.reference} samples x 2 seeds, noise {100 * record['reference']['noise']:.1f} %"
+          f" (object-balanced {100 * record['reference']['balanced_noise']:.1f} %)")
+    print("| run | method | patches | seconds | texel RMS all / inside | object-balanced (noise out) | worst object mean |")
+    print("|---|---|---:|---:|---:|---:|---|")
     for entry, images in rows:
-        result = compare.compare(images, reference["images"], inside)
+        result = compare.compare(images, reference["images"], inside, noise=reference["noise"])
         worst, error = result["worst_object"]
         entry.update(texel_rms=result["texel_rms"], texel_rms_inside=result.get("texel_rms_inside", result["texel_rms"]),
+                     balanced_rms=result["balanced_rms"], balanced_bias=result["balanced_bias"],
                      worst_object=worst, worst_object_error=error,
                      objects={name: e["relative_rgb"] for name, e in result["objects"].items()})
         print(f"| {entry['label']} | {entry['method']} | {entry.get('patches', '')} | {entry['seconds']:.1f} "
               f"| {100 * entry['texel_rms']:.1f} % / {100 * entry['texel_rms_inside']:.1f} % "
-              f"| {worst} {100 * error:+.0f} % |", flush=True)
+              f"| {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) | {worst} {100 * error:+.0f} % |", flush=True)
     if args.densities:
         record["densities"] = density_sweep(path, json.loads(args.runs[0]), args.cycles[0], args.densities, out)
     (out / "presets.json").write_text(json.dumps(record, indent=1, default=float))

@@ -11,6 +11,16 @@ example `inside_box` of the texels' world positions: the texels inside the room)
   their area: Lightmap Pack gives thin faces several times the texels per m² of large ones (a
   floor slab's sides 4–6× its top). Weights per texel (`rasterize_texels`' areas) make it
   area-weighted.
+- object-balanced RMS: the texel relative RMS of each object against its own reference, squared and
+  averaged over all compared texels — sqrt(Σ_o n_o E_o / Σ_o n_o), E_o = Σ_o |ours − ref|² / Σ_o |ref|².
+  The plain texel RMS weighs a texel by its brightness squared, so a scene's few brightest texels
+  decide it: on the Cornell box the ceiling's texels in the 5 mm cavity over the light and the
+  light itself hold 99.4 % of Σ |ref|², and every wall and block together 0.6 %. Balanced, each
+  object's error counts by its texels whatever its brightness. With the reference's noise (half
+  the difference of two seeds' bakes, whose squares estimate the squared noise of their mean), its
+  expected share Σ_o |noise|² is taken from each object's Σ_o |ours − ref|² (at least 0 is left):
+  the error of ours itself, not of the reference's noise, which on the Cornell box's walls is
+  9–13 % per object after 1024 samples.
 - object means: per object and channel, the mean over its compared texels, and the relative
   error of ours against the reference's, per channel and of the RGB sum; the worst object is the
   one whose RGB-sum error is largest in magnitude.
@@ -85,21 +95,44 @@ def worst_object(errors: dict) -> tuple[str, float]:
     return name, finite[name]
 
 
+def object_balanced_rms(ours: dict, reference: dict, texels: dict, noise: dict | None = None) -> float:
+    """sqrt(Σ_o n_o E_o / Σ_o n_o) over the objects with `texels` (n_o of them) and a reference not
+    all black: E_o = Σ |ours − ref|² / Σ |ref|² over the object's texels, RGB; with `noise` (the
+    reference's, `reference_with_noise`), E_o = max(Σ |ours − ref|² − Σ |noise|², 0) / Σ |ref|²."""
+    total = count = 0.0
+    for name, mask in texels.items():
+        scale = _sum_of_squares(reference, {name: mask})
+        if not mask.any() or scale <= 0:
+            continue
+        squares = _sum_of_squares({name: ours[name] - reference[name]}, {name: mask})
+        if noise is not None:
+            squares = max(squares - _sum_of_squares(noise, {name: mask}), 0.0)
+        total += int(mask.sum()) * squares / scale
+        count += int(mask.sum())
+    return float(np.sqrt(total / count)) if count else float("nan")
+
+
 def relative_noise(noise: dict, reference: dict, texels: dict) -> float:
     """The reference's own noise (half the difference of two seeds' bakes) as a texel relative RMS,
     sqrt(Σ |noise|² / Σ |ref|²): the floor under which no error against it can be measured."""
     return float(np.sqrt(_sum_of_squares(noise, texels) / _sum_of_squares(reference, texels)))
 
 
-def compare(ours: dict, reference: dict, inside: dict | None = None, weights: dict | None = None) -> dict:
-    """The bench's comparison: texel RMS over all common texels and over those `inside`, each
-    object's means and errors, and the worst object (over all common texels). With `weights`
-    (texel areas, say) the RMS weigh texels by them instead of counting each once."""
+def compare(ours: dict, reference: dict, inside: dict | None = None, weights: dict | None = None,
+            noise: dict | None = None) -> dict:
+    """The bench's comparison: texel RMS over all common texels and over those `inside`, the
+    object-balanced RMS over all (and, given the reference's `noise`, with its noise taken out:
+    "balanced_bias"), each object's means and errors, and the worst object (over all common
+    texels). With `weights` (texel areas, say) the texel RMS weigh texels by them instead of
+    counting each once."""
     everywhere = common_texels(ours, reference)
     errors = object_errors(ours, reference, everywhere)
     result = {"texel_rms": texel_relative_rms(ours, reference, everywhere, weights), "objects": errors,
+              "balanced_rms": object_balanced_rms(ours, reference, everywhere),
               "worst_object": worst_object(errors), "texels": int(sum(m.sum() for m in everywhere.values())),
               "weighting": "texel count" if weights is None else "given weights"}
+    if noise is not None:
+        result["balanced_bias"] = object_balanced_rms(ours, reference, everywhere, noise)
     if inside is not None:
         within = common_texels(ours, reference, inside)
         result["texel_rms_inside"] = texel_relative_rms(ours, reference, within, weights)
