@@ -149,3 +149,52 @@ def test_divergence_is_a_clear_error():
 def test_matrix_memory_guard_suggests_progressive():
     with pytest.raises(SolveError, match="progressive"):
         hemicube.check_memory(100_000, 2 << 30)
+
+
+def small_patch_over_receiver(height=1.0, side=0.05, offset=(0.54, 0.54)):
+    """The unit receiver of `opposed_squares` with, `height` above it, a `side`-wide square facing down."""
+    scene = opposed_squares(height)
+    x, y = offset
+    square = [[x, y], [x + side, y], [x + side, y + side], [x, y + side]]
+    scene["surfaces"][1]["vertices"] = [[u, v, height] for u, v in square][::-1]
+    return scene
+
+
+def test_bright_patch_columns_are_shot_where_a_coarse_hemicube_misses_a_small_patch(gpu):
+    """A 5 cm patch 1 m over a receiver: the 16-pixel hemi-cube sees it as a pixel or nothing;
+    shot from the patch (bright_columns), the receiver's factor is the exact point-to-polygon
+    one averaged over the same 2 x 2 points, within 2 %."""
+    from radiosity_addon.core.hemicube import analytic
+    from radiosity_addon.core.hemicube.bright_columns import shot_columns
+    from radiosity_addon.core.shooting.sky import element_frames
+
+    scene = scene_from_dict(small_patch_over_receiver())
+    patches = subdivide(scene, 1)
+    shot = shot_columns(gpu, scene, patches, np.array([1]), np.array([0]), 1, 2, "hemicube", 256, True)
+    points = element_frames(patches, 2, np.array([0]))[0]
+    exact = analytic.point_to_polygon(points, np.repeat(patches.normal[:1], 4, axis=0),
+                                      np.repeat(patches.corners[1:2], 4, axis=0)).mean()
+    assert shot.shape == (1, 1)
+    assert shot[0, 0] == pytest.approx(exact, rel=0.02)
+    # why: at 16 pixels the hemi-cube at the receiver's centre sees the patch as the one pixel whose
+    # centre it covers (0.125 wide at 1 m), several times the patch's own 5 cm
+    rasterized = hemicube.form_factor_matrix(gpu, patches, 16, scene.diameter)[0, 1]
+    at_centre = analytic.point_to_polygon(patches.center[:1], patches.normal[:1], patches.corners[1:2])[0]
+    assert rasterized / at_centre > 3
+
+
+def test_bright_patches_are_the_brightest_few_above_the_ratio():
+    from radiosity_addon.core.hemicube import bright_columns
+
+    scene = scene_from_dict(closed_cube())
+    patches = subdivide(scene, 16)  # 1 536 patches of equal area
+    reflected = np.full((len(patches), 3), 0.1)
+    reflected[[3, 7, 11]] = [[50.0] * 3, [40.0] * 3, [30.0] * 3]
+    rows = np.arange(len(patches))
+    assert bright_columns.bright_patches(patches, reflected, rows).tolist() == [3, 7, 11]
+    assert bright_columns.bright_patches(patches, reflected, rows[rows != 7]).tolist() == [3, 11]
+    assert bright_columns.bright_patches(patches, np.full((len(patches), 3), 0.1), rows).tolist() == []
+    limited = np.full((len(patches), 3), 0.01)
+    limited[:bright_columns.MAX_BRIGHT_PATCHES + 5] = np.arange(bright_columns.MAX_BRIGHT_PATCHES + 5)[:, None] + 100.0
+    chosen = bright_columns.bright_patches(patches, limited, rows)  # all above the ratio: the brightest kept
+    assert chosen.tolist() == list(range(5, bright_columns.MAX_BRIGHT_PATCHES + 5))

@@ -27,6 +27,7 @@ from ..shooting import (DirectLightWork, MeasuredDirectLight, direct_light_at_el
                         lamps_as_shooters, patch_means, patch_scale_shots, same_shots)
 from ..timing import StageTimer, scaled_progress
 from . import linear_solvers
+from .bright_columns import shoot_bright_columns
 from .form_factors import check_memory, element_form_factors, patch_rows
 
 READBACK = ("one block of F rows (hemi-cubes in the batch x patches, uint32) per batch;"
@@ -138,6 +139,8 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
     with timer.stage("form_factors"):
         element_rows = element_form_factors(gpu, patches, size, settings.hemicube_res, scene.diameter, rows,
                                             effects.occlusion, scaled_progress(progress, 0.0, 0.8), should_cancel)
+        if effects.occlusion:  # unoccluded factors are analytic: nothing to alias
+            shoot_bright_columns(gpu, scene, patches, element_rows, rows, size, emission, settings)
         form_factors = patch_rows(element_rows, patches, rows, size)
         hemicubes = len(element_rows) if effects.occlusion else 0
     reflectance = solved_channels(patches.reflectance, effects.channels)

@@ -51,6 +51,10 @@ class TexelReceivers:
         """Every shooter, in batches; returns the batches."""
         return shoot_in_batches(self.shoot, self.visibility, shooters)
 
+    def clear(self) -> None:
+        """Zero the gathered light (the points, their buffers and the visibility stay)."""
+        self.buffers["TEXEL_LIGHT"].write(np.zeros((self.count, 4), dtype=np.float32).tobytes())
+
     def read_light(self) -> np.ndarray:
         """(N, 3) float64 light H gathered by each point."""
         return np.frombuffer(self.buffers["TEXEL_LIGHT"].read(), dtype=np.float32).reshape(-1, 4)[:, :3].astype(
