@@ -194,6 +194,9 @@ def test_bright_patches_are_the_brightest_few_above_the_ratio():
     assert bright_columns.bright_patches(patches, reflected, rows).tolist() == [3, 7, 11]
     assert bright_columns.bright_patches(patches, reflected, rows[rows != 7]).tolist() == [3, 11]
     assert bright_columns.bright_patches(patches, np.full((len(patches), 3), 0.1), rows).tolist() == []
+    dim_rest = np.ones((len(patches), 3))
+    dim_rest[[3, 7, 11]] = 50.0  # bright, but 150 of 1 683 of the power reflected: below MIN_POWER_SHARE
+    assert bright_columns.bright_patches(patches, dim_rest, rows).tolist() == []
     limited = np.full((len(patches), 3), 0.01)
     limited[:bright_columns.MAX_BRIGHT_PATCHES + 5] = np.arange(bright_columns.MAX_BRIGHT_PATCHES + 5)[:, None] + 100.0
     chosen = bright_columns.bright_patches(patches, limited, rows)  # all above the ratio: the brightest kept
