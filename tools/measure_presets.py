@@ -10,7 +10,8 @@ the add-on's own Lightmap Pack, saved as DIR/<name>.blend: every bake and Cycles
 that copy, so both fill the same texels. Each run is the add-on's headless bake with the file's
 settings and the run's replaced (content: combined, B), timed as a whole; the reference is Cycles'
 Combined bake at `--reference` samples per seed, two seeds (bench/blend_reference.py, cached in
-DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, timed when baked. The comparison
+DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, timed when baked, with a seed
+of their own (`blend_reference.ROW_SEED`: not correlated with the reference). The comparison
 (bench/compare.py) gives the texel RMS over all texels and over those inside the room (a room of
 bench/rooms.py; elsewhere the same), the object-balanced RMS (each object's error relative to its
 own brightness, counted by its texels) and that with the reference's noise taken out, and the
@@ -73,7 +74,8 @@ def density_sweep(path: Path, run: dict, samples: int, densities: list[float], o
         ours = time.perf_counter() - started
         names = [obj.name for obj in bpy.context.scene.objects if obj.type == "MESH"]
         sizes = blend_lightmaps.sizes_of(blend_lightmaps.read_lightmaps(directory, names))
-        cycles = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, 1, out / "cache")["seconds"]
+        cycles = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, blend_reference.ROW_SEED,
+                                                   out / "cache")["seconds"]
         texels = sum(w * h for w, h in sizes.values())
         rows.append({"texel_density": density, "texels": texels, "ours_seconds": ours, "cycles_seconds": cycles})
         print(f"| {density:g} | {texels} | {ours:.1f} s | {cycles:.1f} s |", flush=True)
@@ -171,7 +173,8 @@ def main() -> int:
                                reference["images"], texels)}
     rows = [(entry, lightmaps[k]) for k, entry in enumerate(record["runs"])]
     for samples in args.cycles:
-        bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, 1, out / "cache")
+        bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, blend_reference.ROW_SEED,
+                                                   out / "cache")
         entry = {"label": f"Cycles {samples} samples", "seconds": bake["seconds"], "method": "cycles"}
         record["runs"].append(entry)
         rows.append((entry, bake["images"]))

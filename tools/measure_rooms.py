@@ -90,8 +90,8 @@ def main() -> int:
                            "noise_inside": compare.relative_noise(reference["noise"], reference["images"], within)}
     compared = {method: lightmaps[method] for method in args.methods}
     for samples in args.samples[:-1]:
-        compared[f"Cycles {samples}"] = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, 1,
-                                                                         out / "cache")["images"]
+        compared[f"Cycles {samples}"] = blend_reference.cycles_lightmaps(path, sizes, "combined", samples,
+                                                                         blend_reference.ROW_SEED, out / "cache")["images"]
     record["comparisons"] = {}
     for name, images in compared.items():
         record["comparisons"][name] = {
