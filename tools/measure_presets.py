@@ -82,8 +82,8 @@ def density_sweep(path: Path, run: dict, samples: int, densities: list[float], o
     return rows
 
 
-METRICS = (("texel_rms", "texel relative RMS, %"),
-           ("balanced_bias", "object-balanced RMS, reference noise out, %"))
+METRICS = (("texel_rms", "texel relative RMS against Cycles' reference, %"),
+           ("balanced_bias", "object-balanced RMS, its noise out, %"))
 
 
 def plot(path: Path, record: dict) -> None:
@@ -115,7 +115,7 @@ def plot(path: Path, record: dict) -> None:
             ticks.set_minor_formatter(matplotlib.ticker.FuncFormatter(
                 lambda value, _: f"{value:g}" if f"{value:e}"[0] in "235" else ""))
         axis.set_xlabel("seconds, whole bake (2 cores, llvmpipe)")
-        axis.set_ylabel(f"{label} against Cycles' reference")
+        axis.set_ylabel(label)
         axis.set_title(Path(record["file"]).name)
         axis.grid(True, which="both", alpha=0.3)
         axis.legend(fontsize=7)
