@@ -9,6 +9,11 @@
 //   F(texel -> whole polygon) * sum_k w_k V_k B_k / sum_k w_k,  w_k = F_disk(texel -> piece k),
 // Lambert's exact factor once per polygon instead of once per piece (the costly part), exact
 // wherever all or none of the pieces are seen and B is uniform, the penumbra weighted piece by piece.
+// SHOT_COLUMNS 1: no light is gathered; each shot's factor F * V is written on its own, to column
+// column_offset + k of the texel's row (hemicube/bright_columns.py: a column of F per shot).
+#ifndef SHOT_COLUMNS
+#define SHOT_COLUMNS 0
+#endif
 #include "bindings"
 #include "constants"
 #include "kernels"
@@ -19,6 +24,12 @@ layout(std430, binding = STORAGE_TEXEL_POSITION) readonly buffer Position { vec4
 layout(std430, binding = STORAGE_TEXEL_NORMAL) readonly buffer Normal { vec4 texel_normal[]; };
 layout(std430, binding = STORAGE_TEXEL_PLANE) readonly buffer TexelPlane { int texel_plane[]; };
 layout(std430, binding = STORAGE_TEXEL_LIGHT) buffer Light { vec4 texel_light[]; };
+
+#if SHOT_COLUMNS
+layout(std430, binding = STORAGE_TEXEL_COLUMNS) writeonly buffer Columns { float texel_columns[]; };
+uniform int column_offset;
+uniform int column_stride;
+#endif
 
 uniform int texel_count;
 uniform int single_count;  // shots [0, single_count) are not pieces of a group
@@ -37,7 +48,11 @@ void main() {
     // the shots that are not pieces of a group come first (TexelReceivers orders them so), each
     // with its own factor; separate loops, so that no lane runs the other's code
     for (int k = 0; k < single_count; ++k) {
+#if SHOT_COLUMNS
+        texel_columns[t * column_stride + column_offset + k] = shot_factor(k, x, n, plane, 0.0);
+#else
         gathered += shots[k].radiosity.rgb * shot_factor(k, x, n, plane, 0.0);
+#endif
     }
     for (int g = 0; g < group_count; ++g) {
         int first = int(group_corner[4 * g].w), end = int(group_corner[4 * g + 1].w);

@@ -172,8 +172,7 @@ def test_bright_patch_columns_are_shot_where_a_coarse_hemicube_misses_a_small_pa
     patches = subdivide(scene, 1)
     shot = shot_columns(gpu, scene, patches, np.array([1]), np.array([0]), 1, 2, "hemicube", 256, True)
     points = element_frames(patches, 2, np.array([0]))[0]
-    exact = analytic.point_to_polygon(points, np.repeat(patches.normal[:1], 4, axis=0),
-                                      np.repeat(patches.corners[1:2], 4, axis=0)).mean()
+    exact = analytic.point_to_polygon(points, np.repeat(patches.normal[:1], 4, axis=0), patches.corners[1:2]).mean()
     assert shot.shape == (1, 1)
     assert shot[0, 0] == pytest.approx(exact, rel=0.02)
     # why: at 16 pixels the hemi-cube at the receiver's centre sees the patch as the one pixel whose
@@ -201,3 +200,62 @@ def test_bright_patches_are_the_brightest_few_above_the_ratio():
     limited[:bright_columns.MAX_BRIGHT_PATCHES + 5] = np.arange(bright_columns.MAX_BRIGHT_PATCHES + 5)[:, None] + 100.0
     chosen = bright_columns.bright_patches(patches, limited, rows)  # all above the ratio: the brightest kept
     assert chosen.tolist() == list(range(5, bright_columns.MAX_BRIGHT_PATCHES + 5))
+
+
+def square(x, y, z, side, facing_up=True):
+    corners = [[x, y, z], [x + side, y, z], [x + side, y + side, z], [x, y + side, z]]
+    return corners if facing_up else corners[::-1]
+
+
+def test_shot_columns_keep_every_shot_apart_element_by_element(gpu):
+    """Two receivers of 2 x 2 elements, four small patches 1 m over them shot in one pass: every
+    (element, patch) entry is the exact point-to-polygon factor at the element's centre, to 2 %
+    (a shot summed into another's column, or elements out of order, would miss it)."""
+    from radiosity_addon.core.hemicube import analytic
+    from radiosity_addon.core.hemicube.bright_columns import shot_columns
+    from radiosity_addon.core.shooting.sky import element_frames
+    from scenes import surface
+
+    small = [square(x, y, 1.0, 0.05, facing_up=False) for x, y in [(0.1, 0.2), (0.7, 0.3), (1.5, 0.8), (2.0, 0.1)]]
+    scene = scene_from_dict({"surfaces": [surface("a", square(0, 0, 0, 1), 0.5, 0), surface("b", square(1.2, 0, 0, 1), 0.5, 0)]
+                             + [surface(f"s{k}", corners, 0.5, 1.0) for k, corners in enumerate(small)]})  # emitting: a valid scene
+    patches = subdivide(scene, 1)
+    rows, columns = np.flatnonzero(patches.surface < 2), np.flatnonzero(patches.surface >= 2)
+    shot = shot_columns(gpu, scene, patches, columns, rows, 2, 2, "hemicube", 256, True)
+    centres = element_frames(patches, 2, rows)[0]
+    normals = np.repeat(patches.normal[rows], 4, axis=0)
+    exact = analytic.point_to_polygon(centres, normals, patches.corners[columns])  # (points, polygons)
+    assert shot.shape == (8, 4)
+    np.testing.assert_allclose(shot, exact, rtol=0.02)
+
+
+def test_bright_columns_replace_only_far_thinly_sampled_entries(gpu):
+    """A bright 5 cm patch 5 cm over a small receiver and 1 m over a large one: the near
+    receiver keeps its hemi-cube entry, the far one takes the shot value where the hemi-cube saw
+    less than WELL_SAMPLED of the patch, and keeps a well-sampled entry."""
+    from radiosity_addon.core.hemicube import analytic
+    from radiosity_addon.core.hemicube.bright_columns import WELL_SAMPLED, shoot_bright_columns
+    from radiosity_addon.core.shooting.sky import element_frames
+    from scenes import surface
+
+    scene = scene_from_dict({"surfaces": [surface("near", square(0.0, 0.0, 0.0, 0.1), 0.5, 0),
+                                          surface("far", square(2.0, 2.0, -0.95, 1.0), 0.5, 0),  # off to the side: the near one hides nothing
+                                          surface("bright", square(0.025, 0.025, 0.05, 0.05, facing_up=False), 0.5, 1.0)]})
+    patches = subdivide(scene, 1)
+    near, far, bright = (int(np.flatnonzero(patches.surface == s)[0]) for s in range(3))
+    reflected = np.ones((len(patches), 3))
+    reflected[bright] = 1000.0  # 71 % of the power reflected
+    rows = np.arange(len(patches))
+    settings = SolveSettings(visibility_res=256)
+    element_rows = np.zeros((len(patches), len(patches)), dtype=np.float32)
+    element_rows[[near, far], bright] = WELL_SAMPLED / 2
+    assert shoot_bright_columns(gpu, scene, patches, element_rows, rows, 1, reflected, settings).tolist() == [bright]
+    points = element_frames(patches, 2, np.array([far]))[0]
+    exact = analytic.point_to_polygon(points, np.repeat(patches.normal[far:far + 1], 4, axis=0),
+                                      patches.corners[bright:bright + 1]).mean()
+    assert element_rows[near, bright] == np.float32(WELL_SAMPLED / 2)
+    assert element_rows[far, bright] == pytest.approx(exact, rel=0.02)
+    assert exact < WELL_SAMPLED / 4  # the replaced entry did change
+    element_rows[far, bright] = 2 * WELL_SAMPLED
+    shoot_bright_columns(gpu, scene, patches, element_rows, rows, 1, reflected, settings)
+    assert element_rows[far, bright] == np.float32(2 * WELL_SAMPLED)

@@ -170,7 +170,7 @@ def main() -> int:
                            "noise": compare.relative_noise(reference["noise"], reference["images"], texels),
                            "balanced_noise": compare.object_balanced_rms(  # of the noise itself: ours = ref + noise
                                {k: v + reference["noise"][k] for k, v in reference["images"].items()},
-                               reference["images"], texels)}
+                               reference["images"], compare.common_texels(reference["images"], reference["images"]))}
     rows = [(entry, lightmaps[k]) for k, entry in enumerate(record["runs"])]
     for samples in args.cycles:
         bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, blend_reference.ROW_SEED,

@@ -71,7 +71,8 @@ def main() -> int:
 
     cycles = {}
     for samples in args.samples:
-        for seed in (1, 2):
+        # the reference's samples in its two seeds, the rows' in the seed they are compared in
+        for seed in blend_reference.REFERENCE_SEEDS if samples == args.samples[-1] else (blend_reference.ROW_SEED,):
             bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, seed, out / "cache")
             cycles[f"{samples} seed {seed}"] = {"seconds": bake["seconds"], "cached": bake["cached"],
                                                 "load_average": os.getloadavg()}

@@ -14,8 +14,8 @@ STORAGE_GROUPS = {
         "PATCH_CORNERS": 0, "PATCH_NORMAL_AREA": 1, "PATCH_REFLECTANCE": 2, "ELEMENT_WEIGHTS": 3,
         "SHOT_ENERGY": 4, "RECORDED_VISIBILITY": 5, "PATCH_PLANE": 6, "SKY_FRACTION": 7,
     },
-    "texels": {"TEXEL_POSITION": 0, "TEXEL_NORMAL": 1, "TEXEL_PLANE": 2, "TEXEL_LIGHT": 3,
-               "PATCH_PLANE": 6},  # direct light into lightmap texels
+    "texels": {"TEXEL_POSITION": 0, "TEXEL_NORMAL": 1, "TEXEL_PLANE": 2, "TEXEL_LIGHT": 3, "TEXEL_COLUMNS": 4,
+               "PATCH_PLANE": 6},  # direct light into lightmap texels (or each shot's factor: TEXEL_COLUMNS)
     "hemicube": {"DELTA_FORM_FACTORS": 1, "FORM_FACTOR_ROWS": 2},
     "item_buffer": {"LOOKUP_CUTS": 1, "LOOKUP_TABLE": 2, "LOOKUP_TWINS": 3, "LOOKUP_BINS": 4},  # bound by each draw
     "jacobi": {"FORM_FACTORS": 0, "JACOBI_EMISSION": 1, "JACOBI_REFLECTANCE": 2, "RADIOSITY_OLD": 3,

@@ -7,11 +7,15 @@ several times over or not at all (32 pixels: the back wall's top row +30 %, in b
 linear solve then carries that error everywhere. The columns of F for such patches are
 recomputed the other way round: each bright patch shoots a unit radiosity with its own
 visibility map (`visibility_res` pixels, the exact point-to-polygon kernel) to COLUMN_POINTS x
-COLUMN_POINTS points of every receiving patch, and the element means replace the hemi-cube's
-entries — where the receiver is far (more than FAR_SIZES times the bright patch's size away) and
-the hemi-cube saw little of the patch (less than WELL_SAMPLED: a few dozen pixels at 32). Near,
+COLUMN_POINTS points of every receiving patch (the texel pass, each shot's factor kept apart:
+`TexelReceivers(columns=...)`, a batch of up to 32 shots a pass), and the element means replace the
+hemi-cube's entries — where the receiving patch's centre is far (more than FAR_SIZES times the
+bright patch's size away) and the hemi-cube saw little of the patch (less than WELL_SAMPLED: at 32
+pixels about 8 pixels at the top face's centre, 30 on average). The pixels the hemi-cube gave
+the patch wrongly are not handed to what lies behind it, so a row's sum moves by what was aliased
+(unbiased on average; it was as wrong the other way). Near,
 the hemi-cube is right and the shot is not: the ceiling's patches shooting at the light's back
-5 mm away left the cavity 2 % dark. Three patches go in one pass (one per colour channel).
+5 mm away left the cavity 2 % dark.
 
 Bright: the light a patch reflects straight from the direct light, ρ D, at least BRIGHT_RATIO
 times the area-weighted mean over the reflecting patches; the brightest MAX_BRIGHT_PATCHES of
@@ -22,7 +26,8 @@ nothing measurable (5.13 %) for 2.1 s. A scene lit evenly has none, and pays not
 
 Measured on the Cornell box (tools/measure_in_process.py, 2026-12-06): final's object-balanced
 error without the reference's noise 7.3 → 4.9 % (the back wall's top row no longer +30 %), its
-texel RMS 2.33 → 2.29 %, for 0.6 s more form factors (1 918 patches, 96 columns in 32 passes);
+texel RMS 2.33 → 2.29 %, for 0.5–0.6 s more form factors (1 918 patches, 96 columns; their 96
+visibility maps are most of it: three shots a pass instead of 32 took 0.6 s against 0.5);
 2 x 2 points per patch gave what 4 x 4 did in half the time. On the 4k room: no change in error
 (5.13 %), 2.1 s more: below MIN_POWER_SHARE, the room shoots none.
 """
@@ -52,7 +57,7 @@ def bright_patches(patches: Patches, reflected: np.ndarray, rows: np.ndarray) ->
         return np.zeros(0, dtype=np.int64)
     level = reflected[rows].sum(axis=1)
     mean = float((patches.area[rows] * level).sum() / patches.area[rows].sum())
-    bright = rows[level > BRIGHT_RATIO * mean] if mean > 0 else rows[:0]
+    bright = rows[level >= BRIGHT_RATIO * mean] if mean > 0 else rows[:0]
     order = np.argsort(-reflected[bright].sum(axis=1), kind="stable")
     bright = np.sort(bright[order[:MAX_BRIGHT_PATCHES]])
     power = float((patches.area[bright] * reflected[bright].sum(axis=1)).sum())
@@ -64,7 +69,7 @@ def shot_columns(gpu: GPU, scene: Scene, patches: Patches, columns: np.ndarray, 
                  points: int, visibility: str, visibility_res: int, occlusion: bool) -> np.ndarray:
     """(len(rows) · S², len(columns)) float32: the form factor from every element of the patches
     `rows` to each patch of `columns`, as the mean over its share of `points` x `points` points
-    of its patch of the light a unit radiosity shot from that patch delivers."""
+    of its patch of the factor of a shot from that patch (its visibility map, the exact kernel)."""
     k = max(1, -(-points // elements))
     per_patch = (elements * k) ** 2
     frames = element_frames(patches, elements * k, rows)
@@ -73,14 +78,11 @@ def shot_columns(gpu: GPU, scene: Scene, patches: Patches, columns: np.ndarray, 
     if len(rows) and len(columns):
         shooters = PatchShooters(patches)
         with gpu.resources() as res:
-            shots = ShotVisibility(res, patches, visibility_res, visibility, scene.diameter, occlusion, capacity=3)
+            shots = ShotVisibility(res, patches, visibility_res, visibility, scene.diameter, occlusion)
             receivers = TexelReceivers(res, patches, frames[0], patches.normal[owners], patches.plane[owners],
-                                       "exact", shots)
-            for first in range(0, len(columns), 3):
-                group = columns[first:first + 3]
-                receivers.clear()
-                receivers.shoot_all([shooters.shooter(int(p), np.eye(3)[c]) for c, p in enumerate(group)])
-                result[:, first:first + len(group)] = receivers.read_light()[:, :len(group)]
+                                       "exact", shots, columns=len(columns))
+            receivers.shoot_all([shooters.shooter(int(p), np.ones(3)) for p in columns])
+            result = receivers.read_columns()
     areas = element_areas(patches, elements * k)[rows]  # (R, S k, S k)
     blocks = result.reshape(len(rows), elements, k, elements, k, len(columns))
     weights = areas.reshape(len(rows), elements, k, elements, k)[..., None]
