@@ -38,6 +38,7 @@ def test_opposed_squares_receiver_radiosity(gpu, distance, exact):
     # skips off: nothing occludes here, so the analysis would use analytic factors instead
     solution = solve(scene, HEMICUBES_AT_256, gpu=gpu)
     assert solution.report.work.hemicubes == 4 * 128
+    assert solution.report.work.bright_columns == 0  # the receiver reflects no light bright enough to alias
     mean = area_weighted_mean(solution, 0)
     np.testing.assert_allclose(mean, 0.5 * exact, rtol=0.03)
 

@@ -20,6 +20,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..errors import SolveCancelled
 from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
@@ -41,6 +42,7 @@ class HemicubeWork:
     form_factor_rows: int
     channels_solved: int
     linear_solve: bool
+    bright_columns: int = 0  # columns of F shot instead of rasterized (bright_columns.py)
     direct: DirectLightWork | None = None  # lamps and sky, when the scene has them
 
     def entries(self) -> dict:
@@ -139,8 +141,11 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
     with timer.stage("form_factors"):
         element_rows = element_form_factors(gpu, patches, size, settings.hemicube_res, scene.diameter, rows,
                                             effects.occlusion, scaled_progress(progress, 0.0, 0.8), should_cancel)
+        bright = rows[:0]
         if effects.occlusion:  # unoccluded factors are analytic: nothing to alias
-            shoot_bright_columns(gpu, scene, patches, element_rows, rows, size, emission, settings)
+            if should_cancel is not None and should_cancel():
+                raise SolveCancelled("cancelled")
+            bright = shoot_bright_columns(gpu, scene, patches, element_rows, rows, size, emission, settings)
         form_factors = patch_rows(element_rows, patches, rows, size)
         hemicubes = len(element_rows) if effects.occlusion else 0
     reflectance = solved_channels(patches.reflectance, effects.channels)
@@ -168,6 +173,7 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
         hemicube_resolution=settings.hemicube_res,
         form_factor_row_sum={"min": float(row_sums.min()), "max": float(row_sums.max())},
         work=HemicubeWork(hemicubes=hemicubes, form_factor_rows=int(len(rows)), channels_solved=effects.channels,
-                          linear_solve=bool(effects.interreflection), direct=direct_work),
+                          linear_solve=bool(effects.interreflection), bright_columns=len(bright),
+                          direct=direct_work),
     )
     return radiosity, elements, light, direct, details, form_factors
