@@ -36,15 +36,17 @@ def recorded_draws(monkeypatch):
         enabled.discard(enum - CLIP_DISTANCE0)
         original_disable(ctx, enum)
 
-    def draw(vao, *args, **kwargs):
-        draws.append(set(enabled))
-        return original_render(vao, *args, **kwargs)
+    def recorded(original):
+        def draw(vao, *args, **kwargs):
+            draws.append(set(enabled))
+            return original(vao, *args, **kwargs)
+        return draw
 
     original_enable, original_disable = moderngl.Context.enable_direct, moderngl.Context.disable_direct
-    original_render = moderngl.VertexArray.render
     monkeypatch.setattr(moderngl.Context, "enable_direct", enable)
     monkeypatch.setattr(moderngl.Context, "disable_direct", disable)
-    monkeypatch.setattr(moderngl.VertexArray, "render", draw)
+    for call in ("render", "render_indirect"):  # the hemi-cube's culled faces draw indirectly
+        monkeypatch.setattr(moderngl.VertexArray, call, recorded(getattr(moderngl.VertexArray, call)))
     return draws, enabled
 
 

@@ -37,20 +37,33 @@ def clip_distances_written(source: str | None) -> int:
     return int(match.group(1)) if match else 0
 
 
+@contextlib.contextmanager
+def _clip_distances(vao):
+    count = (vao.program.extra or {}).get("clip_distances", 0)
+    for k in range(count):
+        vao.ctx.enable_direct(CLIP_DISTANCE0 + k)
+    try:
+        yield
+    finally:
+        for k in range(count):
+            vao.ctx.disable_direct(CLIP_DISTANCE0 + k)
+
+
+def render_indirect(vao, commands, count: int) -> None:
+    """`vao.render_indirect` of `count` commands in buffer `commands` (one multi-draw call), with the
+    clip distances its program writes enabled, as `render`."""
+    with _clip_distances(vao):
+        vao.render_indirect(commands, count=count)
+
+
 def render(vao, **kwargs) -> None:
     """`vao.render(**kwargs)` with the clip distances its program writes enabled, and disabled
     after. A conformant driver (NVIDIA's, and the GL spec) clips only against enabled distances
     and ignores the rest; Mesa's llvmpipe clips against every distance written, enabled or not,
     so a missing enable passes every test here and draws each hemi-cube face over the whole atlas
     on a real GPU (seen on an NVIDIA H200: black lightmaps)."""
-    count = (vao.program.extra or {}).get("clip_distances", 0)
-    for k in range(count):
-        vao.ctx.enable_direct(CLIP_DISTANCE0 + k)
-    try:
+    with _clip_distances(vao):
         vao.render(**kwargs)
-    finally:
-        for k in range(count):
-            vao.ctx.disable_direct(CLIP_DISTANCE0 + k)
 
 
 _active = threading.local()  # per thread: the contexts made current by `active`, innermost last

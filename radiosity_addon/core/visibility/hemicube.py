@@ -5,17 +5,19 @@ The scene is drawn into the five faces of a hemi-cube at each point as an item b
 patch ids (depth test on). The pixels showing patch j, weighted by their delta form factors,
 sum to the fraction patch j covers: F_ij for a hemi-cube at patch i's centre (the hemi-cube
 method), the sky fraction 1 - sum_j for one at an element (the world colour). Work is
-batched: many hemi-cubes share one atlas framebuffer and are drawn by one instanced draw
-call; a compute shader reduces the atlas into rows on the GPU; one readback per batch.
+batched: many hemi-cubes share one atlas framebuffer and are drawn by one multi-draw call, each
+face only the triangle clusters its frustum reaches (face_culling.py); a compute shader reduces
+the atlas into rows on the GPU; one readback per batch.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..gpu import FORM_FACTOR_ONE, MAX_WORK_GROUPS, Resources, render, storage, texture_unit, work_groups
+from ..gpu import FORM_FACTOR_ONE, MAX_WORK_GROUPS, Resources, render_indirect, storage, texture_unit, work_groups
 from ..scene import Patches
 from ..scene.geometry import tangent_frames
+from .face_culling import COMMAND_WORDS, draw_commands, triangle_clusters
 from .item_geometry import VERTEX_FORMAT, VERTEX_FORMAT_WITHOUT_LOOKUP, item_geometry
 
 ATLAS_LIMIT = 4096  # atlas side in pixels (llvmpipe allows 16384; 4096 keeps memory modest)
@@ -88,7 +90,7 @@ NEAR = 1e-7  # of the scene's diameter: nearer than that a hemi-cube sees nothin
 
 
 class HemicubeAtlas:
-    """Hemi-cube item buffers of one set of patches, many per atlas, drawn by one instanced call:
+    """Hemi-cube item buffers of one set of patches, many per atlas, drawn by one multi-draw call:
     `draw(frames)` fills slots 0..len(frames) - 1 (front items: patch id + 1; backs: the twin's
     id + 1, or `back_item` where the back is not simulated; 0: nothing)."""
 
@@ -115,8 +117,11 @@ class HemicubeAtlas:
         self.program = res.gpu.program("hemicube_item_buffer.vert", "hemicube_item_buffer.frag",
                                        defines={"LOOKUP": int(looked_up)})
         self.uniforms = {"near": NEAR * scene_diameter, "far": 4.0 * scene_diameter, "back_item": self.row_length}
+        self.clusters = triangle_clusters(geometry.vertices["p"], geometry.indices)
         self.vertex_buffer = res.buffer(geometry.vertices.tobytes())
-        self.index_buffer = res.buffer(geometry.indices.tobytes())
+        self.index_buffer = res.buffer(self.clusters.indices.tobytes())
+        self.command_buffer = res.buffer(reserve=4 * COMMAND_WORDS)
+        self.triangles_drawn = 0  # by the batches so far, after culling (the work llvmpipe's time follows)
         self.lookup_buffers = {
             "LOOKUP_CUTS": res.buffer(geometry.cuts.tobytes()),
             "LOOKUP_BINS": res.buffer(geometry.bins.tobytes()),
@@ -152,10 +157,17 @@ class HemicubeAtlas:
             self.program[name] = value
         for name, buffer in self.lookup_buffers.items():
             buffer.bind_to_storage_buffer(storage(name))
+        commands = draw_commands(self.clusters, instances)
+        self.triangles_drawn += int(commands[:, 0].sum()) // 3
         self.framebuffer.use()
         self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
         ctx.enable_only(ctx.DEPTH_TEST)
-        render(self.vao, instances=count * 5)
+        if len(commands) == 0:
+            return
+        if self.command_buffer.size < commands.nbytes:
+            self.command_buffer.orphan(commands.nbytes)
+        self.command_buffer.write(commands.tobytes())
+        render_indirect(self.vao, self.command_buffer, len(commands))
 
     def bind(self, unit: int) -> None:
         self.item_texture.use(unit)
