@@ -260,3 +260,12 @@ def test_bright_columns_replace_only_far_thinly_sampled_entries(gpu):
     element_rows[far, bright] = 2 * WELL_SAMPLED
     shoot_bright_columns(gpu, scene, patches, element_rows, rows, 1, reflected, settings)
     assert element_rows[far, bright] == np.float32(2 * WELL_SAMPLED)
+
+
+def test_widened_product_sums_a_float32_matrix_in_float64_block_by_block():
+    rng = np.random.default_rng(3)
+    matrix = rng.random((1300, 700), dtype=np.float32)
+    vectors = rng.random((700, 3))
+    exact = matrix.astype(np.float64) @ vectors
+    np.testing.assert_allclose(linear_solvers.widened_product(matrix, vectors, block=512), exact, rtol=1e-13)
+    assert np.abs(matrix @ vectors.astype(np.float32) / exact - 1).max() > 1e-8  # float32 sums would not

@@ -93,7 +93,7 @@ def element_form_factors(gpu: GPU, patches: Patches, elements: int, resolution: 
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
             batch = tuple(v[first:first + renderer.slots] for v in frames)
-            result[first:first + len(batch[0])] = renderer.coverage(batch)[:, :-1]
+            result[first:first + len(batch[0])] = renderer.coverage(batch, np.float32)[:, :-1]
             if progress is not None:
                 done = first + len(batch[0])
                 progress(done / count, f"hemi-cubes {done}/{count}", {"hemicubes": done})
@@ -101,9 +101,15 @@ def element_form_factors(gpu: GPU, patches: Patches, elements: int, resolution: 
 
 
 def patch_rows(element_rows: np.ndarray, patches: Patches, rows: np.ndarray, elements: int) -> np.ndarray:
-    """(P, P) float32 F: each row in `rows` the area-weighted mean of its elements' rows; others 0."""
+    """(P, P) float32 F: each row in `rows` the area-weighted mean of its elements' rows; others 0.
+    One element a patch and every row: `element_rows` itself (a copy would be P² more bytes)."""
+    if elements == 1 and len(rows) == len(patches):  # rows are every patch, in order
+        return element_rows
     matrix = np.zeros((len(patches), len(patches)), dtype=np.float32)
     if len(rows) == 0:
+        return matrix
+    if elements == 1:  # each row is its one element's
+        matrix[rows] = element_rows
         return matrix
     weights = element_areas(patches, elements)[rows].reshape(len(rows), -1)
     weights = weights / weights.sum(axis=1, keepdims=True)

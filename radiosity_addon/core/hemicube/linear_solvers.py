@@ -76,6 +76,15 @@ class Convergence:
                           {"iterations": iterations, "relative_change": relative})
         return False
 
+def widened_product(matrix: np.ndarray, vectors: np.ndarray, block: int = 512) -> np.ndarray:
+    """matrix @ vectors with float64 sums for a float32 matrix, widening a block of rows at a
+    time (a float64 copy of the whole matrix would double the memory the guard allowed)."""
+    result = np.empty((len(matrix),) + vectors.shape[1:], dtype=np.float64)
+    for start in range(0, len(matrix), block):
+        result[start:start + block] = matrix[start:start + block] @ vectors
+    return result
+
+
 def jacobi_cpu(form_factors, reflectance, emission, monitor: Convergence) -> np.ndarray:
     matrix = np.asarray(form_factors, dtype=np.float64)
     radiosity = emission.astype(np.float64).copy()

@@ -163,8 +163,7 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
     reflected = as_rgb(reflected)
     radiosity = own_emission + reflected
     light = direct + sky_light
-    gathered = element_rows.astype(np.float64)
-    light[rows] += (gathered @ reflected).reshape(len(rows), size, size, 3)
+    light[rows] += linear_solvers.widened_product(element_rows, reflected).reshape(len(rows), size, size, 3)
     elements = own_emission[:, None, None, :] + patches.reflectance[:, None, None, :] * light
     row_sums = form_factors[rows].sum(axis=1, dtype="f8") if len(rows) else np.zeros(1)
     details = HemicubeDetails(
