@@ -9,7 +9,7 @@ as the unshot light weakens whole coarse clusters shoot: CLUSTERED_SHOTS of the 
 each; draft on the 3.9k- and 15.8k-triangle rooms, 7 007 and 23 424 patches, took 1 888 and
 1 792 shots, the model says 1 813 for both).
 Hemi-cube method: a hemi-cube per receiving element (S_h^2 per patch) over the triangles its
-atlas draws (a surface of many patches is drawn once and looked up: visibility/item_geometry.py;
+atlas draws (of which each face draws the clusters its frustum reaches) (a surface of many patches is drawn once and looked up: visibility/item_geometry.py;
 the 4k room's 7 793 patches are 13 976 triangles, 5 080 drawn), then Jacobi sweeps over the P x P
 matrix (~log(tolerance) / log(mean reflectance) sweeps); its matrices must fit the memory limit,
 else it is not a choice at all.
@@ -32,8 +32,11 @@ from .visibility.item_geometry import item_geometry
 # development machine busy with other jobs: absolute numbers ~2-3x high, their ratios hold)
 # a hemi-cube drawn, reduced, read back: measured on the idle machine since the lookup's record rides on
 # the vertices (docs/architecture.md), per pixel on the Cornell box's draft (838 32-px hemi-cubes over 32
-# drawn triangles, 0.34 s), per drawn triangle and face on the 4k room's good (7 793 over 5 080, 17.5 s)
-HEMICUBE_SECONDS = {"pixel": 1.27e-07, "triangle": 7.3e-08}
+# drawn triangles, 0.34 s), per drawn triangle and face on the 4k room's good (7 793 over 5 080: 17.5 s
+# when every face drew every triangle, 10.8-13.3 s since each face draws only the clusters of triangles
+# its frustum reaches, about a third: visibility/face_culling.py). A progressive shot's hemi-cube is culled
+# alike; SHOT_SECONDS are from before it, not measured since: progressive may be predicted slower than it is
+HEMICUBE_SECONDS = {"pixel": 1.27e-07, "triangle": 4.6e-08}
 SHOT_SECONDS = {"pixel": 5.18e-09, "triangle": 1.21e-07, "element": 3.4e-07}  # a progressive shot
 SECONDS_PER_MATRIX_ENTRY_SWEEP = 3.93e-09
 SHOTS_PER_PATCH = {0.01: 2.62, 0.003: 3.56, 0.001: 4.40}  # progressive, Cornell box, by tolerance
