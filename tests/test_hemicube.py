@@ -269,3 +269,17 @@ def test_widened_product_sums_a_float32_matrix_in_float64_block_by_block():
     exact = matrix.astype(np.float64) @ vectors
     np.testing.assert_allclose(linear_solvers.widened_product(matrix, vectors, block=512), exact, rtol=1e-13)
     assert np.abs(matrix @ vectors.astype(np.float32) / exact - 1).max() > 1e-8  # float32 sums would not
+
+
+@pytest.mark.parametrize("tolerance", [1e-5, 1e-7])  # float32 sums, float64 sums (SINGLE_SUMS_TOLERANCE)
+def test_gauss_seidel_stops_near_the_converged_solution_in_either_precision(tolerance):
+    rng = np.random.default_rng(4)
+    count = 600
+    form_factors = rng.random((count, count), dtype=np.float32) * np.float32(1.8 / count)
+    np.fill_diagonal(form_factors, 0)
+    reflectance, emission = rng.uniform(0.3, 0.9, (count, 3)), rng.random((count, 3))
+    exact = np.linalg.solve(np.eye(count)[None] - reflectance.T[:, :, None] * form_factors.astype(np.float64)[None],
+                            emission.T[:, :, None])[:, :, 0].T
+    solved = linear_solvers.gauss_seidel(form_factors, reflectance, emission,
+                                         linear_solvers.Convergence("gauss-seidel", tolerance, 1000))
+    assert np.abs(solved - exact).max() / exact.max() < 10 * tolerance
