@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 PAIR_CHUNK = 1 << 20  # candidate pairs expanded at once
-CLASS_RATIO = 4.0  # sizes within a class differ by at most this factor
+CLASS_RATIO = 2.5  # sizes within a class differ by at most this factor (4: the 4k room's 7 793 patches' facing partners 0.73-0.77 s, 2.5: 0.57 s, 2: 0.63 s)
 
 
 def _cell_keys(cells: np.ndarray, span: np.ndarray) -> np.ndarray:
@@ -60,8 +60,8 @@ def _grid_pairs(centre, radius, queries, reach, positions, others):
         hi = np.searchsorted(sorted_keys, k, side="right")
         for which, at in range_chunks(lo, np.where(valid, hi - lo, 0)):
             query, other = positions[which], others[order[at]]
-            gap = np.linalg.norm(centre[other] - centre[queries[query]], axis=1)
-            close = gap < reach[query] + radius[other]
+            offset = centre[other] - centre[queries[query]]
+            close = np.einsum("nd,nd->n", offset, offset) < np.square(reach[query] + radius[other])
             yield query[close], other[close]
 
 
