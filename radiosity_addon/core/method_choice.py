@@ -9,8 +9,9 @@ as the unshot light weakens whole coarse clusters shoot: CLUSTERED_SHOTS of the 
 each; draft on the 3.9k- and 15.8k-triangle rooms, 7 007 and 23 424 patches, took 1 888 and
 1 792 shots, the model says 1 813 for both).
 Hemi-cube method: a hemi-cube per receiving element (S_h^2 per patch) over the triangles its
-atlas draws (of which each face draws the clusters its frustum reaches) (a surface of many patches is drawn once and looked up: visibility/item_geometry.py;
-the 4k room's 7 793 patches are 13 976 triangles, 5 080 drawn), then Jacobi sweeps over the P x P
+atlas draws (a surface of many patches is drawn once and looked up: visibility/item_geometry.py;
+the 4k room's 7 793 patches are 13 976 triangles, 5 080 drawn; each face draws only the clusters of
+them its frustum reaches: visibility/face_culling.py), then Jacobi sweeps over the P x P
 matrix (~log(tolerance) / log(mean reflectance) sweeps); its matrices must fit the memory limit,
 else it is not a choice at all.
 """

@@ -80,6 +80,7 @@ class Convergence:
                           {"iterations": iterations, "relative_change": relative})
         return False
 
+
 def widened_product(matrix: np.ndarray, vectors: np.ndarray, block: int = 512) -> np.ndarray:
     """matrix @ vectors with float64 sums for a float32 matrix, widening a block of rows at a
     time (a float64 copy of the whole matrix would double the memory the guard allowed)."""
