@@ -10,7 +10,7 @@ the add-on's own Lightmap Pack, saved as DIR/<name>.blend: every bake and Cycles
 that copy, so both fill the same texels. Each run is the add-on's headless bake with the file's
 settings and the run's replaced (content: combined, B), timed as a whole; the reference is Cycles'
 Combined bake at `--reference` samples per seed, two seeds (bench/blend_reference.py, cached in
-DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, timed when baked, with a seed
+DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, baked and timed in this run, with a seed
 of their own (`blend_reference.ROW_SEED`: not correlated with the reference). The comparison
 (bench/compare.py) gives the texel RMS over all texels and over those inside the room (a room of
 bench/rooms.py; elsewhere the same), the object-balanced RMS (each object's error relative to its
@@ -173,8 +173,8 @@ def main() -> int:
                                reference["images"], compare.common_texels(reference["images"], reference["images"]))}
     rows = [(entry, lightmaps[k]) for k, entry in enumerate(record["runs"])]
     for samples in args.cycles:
-        bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, blend_reference.ROW_SEED,
-                                                   out / "cache")
+        # never from the cache: a row's seconds must be measured in this run, beside ours
+        bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, blend_reference.ROW_SEED)
         entry = {"label": f"Cycles {samples} samples", "seconds": bake["seconds"], "method": "cycles"}
         record["runs"].append(entry)
         rows.append((entry, bake["images"]))

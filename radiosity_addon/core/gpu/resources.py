@@ -8,7 +8,11 @@ after), so several contexts in one thread — a caller's and one of its own — 
 Render targets a pass clears before every use (visibility atlases and maps: up to 100 MB each)
 are `scratch`: a closing scope hands them back to its GPU, and the next scope asking for the same
 size takes them instead of a fresh allocation, which llvmpipe zero-fills page by page (~0.14 s
-for a 4096 x 3072 atlas and its depth, once per probe round and per texel pass before this pool)."""
+for a 4096 x 3072 atlas and its depth, once per probe round and per texel pass before this pool).
+
+What several passes of one job draw alike (the surfaces' visibility from the same emitter pieces,
+seen by every refinement round, the direct light and the lightmaps) is `kept`: made once in a
+scope of the GPU's own, kept until the GPU closes (or the least recently used of MAX_KEPT goes)."""
 
 from __future__ import annotations
 
@@ -22,6 +26,7 @@ from .shaders import includes, shader_source, with_defines
 
 CLIP_DISTANCE0 = 0x3000  # GL_CLIP_DISTANCE0 (moderngl has no name for it)
 MAX_SPARE_BYTES = 512 << 20  # scratch targets kept between scopes: two texel-pass atlases and their depth
+MAX_KEPT = 4  # objects `kept` between passes (a texel pass's atlas and its depth: ~50 MB each)
 BYTES_PER_TEXEL = {"f1": 1, "u1": 1, "i1": 1, "f2": 2, "u2": 2, "i2": 2, "f4": 4, "u4": 4, "i4": 4}
 
 
@@ -94,6 +99,7 @@ class GPU:
         self._owns_context = ctx is None
         self._programs: dict[tuple, object] = {}
         self._spares: dict[tuple, list] = {}  # scratch targets no scope holds, by (kind, size, format)
+        self._kept: dict[tuple, tuple] = {}  # key -> (its own scope, the object), least recently used first
         for name, source in includes().items():
             self.ctx.includes[name] = source
 
@@ -125,6 +131,29 @@ class GPU:
     def resources(self) -> "Resources":
         return Resources(self)
 
+    def kept(self, key: tuple, make):
+        """The object `make(resources)` made for `key`, made on the first call and kept, with all
+        it made in `resources`, for the later calls with that key until the GPU closes (at most
+        MAX_KEPT keys: the least recently used is released first)."""
+        if key in self._kept:
+            self._kept[key] = self._kept.pop(key)  # now the most recently used
+            return self._kept[key][1]
+        while len(self._kept) >= MAX_KEPT:
+            scope, _ = self._kept.pop(next(iter(self._kept)))
+            scope.release()
+        scope = Resources(self)
+        try:
+            obj = make(scope)
+        except BaseException:
+            scope.release()
+            raise
+        self._kept[key] = (scope, obj)
+        return obj
+
+    @property
+    def kept_count(self) -> int:
+        return len(self._kept)
+
     @property
     def spare_bytes(self) -> int:
         """Memory of the scratch targets kept for the next scope."""
@@ -144,6 +173,9 @@ class GPU:
 
     def close(self) -> None:
         with active(self.ctx):
+            for scope, _ in reversed(list(self._kept.values())):
+                scope.release()
+            self._kept.clear()
             for spares in self._spares.values():
                 for obj in spares:
                     obj.release()

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..gpu import GPU
 from ..scene import Patches, Scene
-from ..shooting import PatchShooters, ShotVisibility, TexelReceivers, element_areas
+from ..shooting import PatchShooters, TexelReceivers, element_areas, surface_visibility
 from ..shooting.sky import element_frames
 
 BRIGHT_RATIO = 4.0
@@ -78,8 +78,8 @@ def shot_columns(gpu: GPU, scene: Scene, patches: Patches, columns: np.ndarray, 
     if len(rows) and len(columns):
         shooters = PatchShooters(patches)
         with gpu.resources() as res:
-            shots = ShotVisibility(res, patches, visibility_res, visibility, scene.diameter, occlusion)
-            receivers = TexelReceivers(res, patches, frames[0], patches.normal[owners], patches.plane[owners],
+            shots = surface_visibility(res, scene, patches, visibility_res, visibility, occlusion)
+            receivers = TexelReceivers(res, frames[0], patches.normal[owners], patches.plane[owners],
                                        "exact", shots, columns=len(columns))
             receivers.shoot_all([shooters.shooter(int(p), np.ones(3)) for p in columns])
             result = receivers.read_columns()

@@ -4,9 +4,9 @@ from .analysis import SceneEffects, analyse, check_has_emitter, effects_for, emi
 from .lamps import Lamp
 from .load import bundled_scene_names, load_scene, save_scene, scene_from_dict
 from .model import MaterialMap, Scene, Surface
-from .patches import Patches, split_patches, subdivide
+from .patches import Patches, split_patches, subdivide, surface_patches
 from .validate import MAX_REFLECTANCE, polygon_faults
 
 __all__ = ["Lamp", "MAX_REFLECTANCE", "MaterialMap", "Patches", "Scene", "SceneEffects", "Surface", "analyse", "bundled_scene_names",
            "check_has_emitter", "effects_for", "emitter_count", "load_scene", "polygon_faults", "save_scene",
-           "scene_from_dict", "split_patches", "subdivide"]
+           "scene_from_dict", "split_patches", "subdivide", "surface_patches"]

@@ -249,3 +249,11 @@ def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
         surface_corners=np.asarray(scene.corners, dtype=np.float64),
     )
     return patches if backs is None else with_back_patches(patches, backs)
+
+
+def surface_patches(scene: Scene, patches: Patches) -> Patches:
+    """One patch per surface of `scene` (front k is surface k), with a back wherever `patches`
+    have backs: what the surfaces show, whatever their split (the texel pass's item buffers)."""
+    backs = np.zeros(len(scene), dtype=bool)
+    backs[patches.surface[patches.is_back]] = True
+    return subdivide(scene, subdiv=1, backs=backs)

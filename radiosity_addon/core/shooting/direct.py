@@ -24,7 +24,7 @@ from ..scene.geometry import reversed_corners
 from .lamps import AREA_LAMP_MAX_SPLIT, lamp_shooters, polygon_shooters
 from .shooters import Shooter
 from .shooting_pass import ShootingPass
-from .shots import MAX_SHOTS, ShotVisibility
+from .shots import MAX_SHOTS, surface_visibility
 from .sky import SKY_HEMICUBE_RESOLUTION, element_frames, sky_fractions
 from .texel_pass import TexelReceivers
 
@@ -153,9 +153,8 @@ def light_at_points(res: Resources, scene: Scene, patches: Patches, points: np.n
     if not shooters or len(points) == 0:
         return np.zeros((len(points), 3))
     with res.gpu.resources() as scoped:
-        shots = ShotVisibility(scoped, patches, resolution, visibility, scene.diameter, occlusion, capacity)
-        receivers = TexelReceivers(scoped, patches, points, patches.normal[owners], patches.plane[owners], "exact",
-                                   shots)
+        shots = surface_visibility(scoped, scene, patches, resolution, visibility, occlusion, capacity)
+        receivers = TexelReceivers(scoped, points, patches.normal[owners], patches.plane[owners], "exact", shots)
         receivers.shoot_all(shooters)
         return receivers.read_light()
 

@@ -10,10 +10,12 @@ hemispherical map variants (one map at a time).
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from ..gpu import Resources, texture_unit, uniform_block
-from ..scene import Patches
+from ..scene import Patches, Scene, surface_patches
 from ..visibility import VARIANTS, HemicubeAtlas, VisibilityMap
 from .shooters import DIRECTIONAL, SKY, Shooter
 
@@ -111,17 +113,23 @@ class ShotVisibility:
     list into batches this can take."""
 
     def __init__(self, res: Resources, patches: Patches, resolution: int, variant: str, scene_diameter: float,
-                 occlusion: bool = True, capacity: int = MAX_SHOTS):
+                 occlusion: bool = True, capacity: int = MAX_SHOTS, kept_as: tuple | None = None):
+        """The item buffers show `patches`; `kept_as` (a key naming them, e.g. `surface_visibility`'s):
+        the atlas and the map are the GPU's kept ones for it (`GPU.kept`), not this scope's."""
         self.res, self.patches, self.resolution, self.occlusion = res, patches, resolution, occlusion
         self.variant, self.diameter = VARIANTS[variant], scene_diameter
         self.name = variant
+        self.kept_as = kept_as
+        self.skip_of = patches.drawn  # a shooter's patch -> the item a map leaves out for it
         self.atlas = None
         self._map = None
         if self.variant.hemicube:
             self.capacity = min(capacity, MAX_SHOTS)
             if occlusion:
-                self.atlas = HemicubeAtlas(res, patches, hemicube_resolution(resolution), scene_diameter,
-                                           max_slots=self.capacity)
+                self.atlas = self._own_or_kept(
+                    ("atlas", hemicube_resolution(resolution), self.capacity),
+                    lambda scope: HemicubeAtlas(scope, patches, hemicube_resolution(resolution), scene_diameter,
+                                                max_slots=self.capacity))
                 self.capacity = min(self.capacity, self.atlas.slots)
         else:
             self.capacity = 1
@@ -134,8 +142,15 @@ class ShotVisibility:
         """The hemispherical (or a sun's orthographic) map, made when first needed."""
         if self._map is None:
             variant = "plain" if self.variant.hemicube else self.name  # a sun's map needs no tessellation
-            self._map = VisibilityMap(self.res, self.patches, self.resolution, variant, self.diameter)
+            self._map = self._own_or_kept(
+                ("map", variant, self.resolution),
+                lambda scope: VisibilityMap(scope, self.patches, self.resolution, variant, self.diameter))
         return self._map
+
+    def _own_or_kept(self, what: tuple, make):
+        if self.kept_as is None:
+            return make(self.res)
+        return self.res.gpu.kept(("shot visibility", self.kept_as, self.diameter, *what), make)
 
     @staticmethod
     def alone(shooter: Shooter) -> bool:
@@ -184,7 +199,7 @@ class ShotVisibility:
                 self.maps_rendered += len(shooters)
             elif shooters[0].kind != SKY:
                 (shooter,) = shooters
-                skip = int(self.patches.drawn[shooter.patch]) if shooter.patch >= 0 else -1
+                skip = int(self.skip_of[shooter.patch]) if shooter.patch >= 0 else -1
                 self.map.render(shooter.position, shooter.axes, skip, shooter.ortho_extent)
                 self.map.bind()
                 self.maps_rendered += 1
@@ -197,3 +212,21 @@ class ShotVisibility:
         """The "shot" include's defines."""
         return {"MAX_SHOTS": MAX_SHOTS, "SEARCH_RADIUS": self.variant.search_radius,
                 "OCCLUDER_MARGIN": float(self.variant.occluder_margin), "OCCLUSION": int(self.occlusion)}
+
+
+def surface_visibility(res: Resources, scene: Scene, patches: Patches, resolution: int, variant: str,
+                       occlusion: bool = True, capacity: int = MAX_SHOTS) -> ShotVisibility:
+    """The texel pass's visibility for receivers on `patches`: item buffers of the surfaces
+    (`surface_patches`: one item per surface side), not of the patches. A texel pass looks up
+    only the receiver's plane and, for what shows in front of it, that item's plane and outline,
+    which a surface gives as its patches together would; so its maps cost the surfaces' triangles
+    however finely refinement split them, and they are the same for every split: kept on the GPU
+    for the job (`GPU.kept`), and not drawn again for the same shots (the emitters' pieces of every
+    refinement round, the direct light and the lightmaps at one resolution)."""
+    surfaces = surface_patches(scene, patches)
+    digest = hashlib.sha1(np.ascontiguousarray(surfaces.corners).tobytes())
+    digest.update(np.ascontiguousarray(surfaces.twin).tobytes())
+    visibility = ShotVisibility(res, surfaces, resolution, variant, scene.diameter, occlusion, capacity,
+                                kept_as=("surfaces", digest.hexdigest()))
+    visibility.skip_of = np.asarray(patches.surface)  # a patch's surface: item k is surface k's front
+    return visibility

@@ -8,7 +8,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..gpu import Resources, storage
-from ..scene import Patches
 from .shooters import Shooter
 from .shooting_pass import dispatch, set_uniforms
 from .shots import ShotVisibility, patch_planes, shoot_in_batches, singles_then_groups
@@ -16,11 +15,11 @@ from .shots import ShotVisibility, patch_planes, shoot_in_batches, singles_then_
 
 class TexelReceivers:
     """Points that gather direct light: world positions (N, 3), normals (N, 3) and planes (N,)
-    (the plane of the patch each lies on: `Patches.plane`). With `columns` > 0 they gather no
+    (the plane of the patch each lies on: `Patches.plane`), looked up in `visibility`'s items. With `columns` > 0 they gather no
     light: each shot's factor is kept apart, shot k of all those shot in column k (N, columns),
     for shots in no group (`read_columns`)."""
 
-    def __init__(self, res: Resources, patches: Patches, positions: np.ndarray, normals: np.ndarray,
+    def __init__(self, res: Resources, positions: np.ndarray, normals: np.ndarray,
                  planes: np.ndarray, kernel: str, visibility: ShotVisibility, columns: int = 0):
         self.ctx, self.count = res.ctx, len(positions)
         vec4 = lambda a: np.concatenate([a, np.zeros((len(a), 1))], axis=1).astype(np.float32)  # noqa: E731
@@ -29,7 +28,7 @@ class TexelReceivers:
             "TEXEL_NORMAL": res.buffer(vec4(normals).tobytes()),
             "TEXEL_PLANE": res.buffer(np.asarray(planes, dtype=np.int32).tobytes()),
             "TEXEL_LIGHT": res.buffer(np.zeros((self.count, 4), dtype=np.float32).tobytes()),
-            "PATCH_PLANE": res.buffer(patch_planes(patches)),
+            "PATCH_PLANE": res.buffer(patch_planes(visibility.patches)),  # what the item buffers show
         }
         self.columns, self.columns_filled = columns, 0
         if columns:

@@ -122,6 +122,8 @@ class HemicubeAtlas:
         self.index_buffer = res.buffer(self.clusters.indices.tobytes())
         self.command_buffer = res.buffer(reserve=4 * COMMAND_WORDS)
         self.triangles_drawn = 0  # by the batches so far, after culling (the work llvmpipe's time follows)
+        self.drawn_frames = None  # the frames the atlas holds now
+        self.draws_skipped = 0  # draws of the frames it held already
         self.lookup_buffers = {
             "LOOKUP_CUTS": res.buffer(geometry.cuts.tobytes()),
             "LOOKUP_BINS": res.buffer(geometry.bins.tobytes()),
@@ -148,8 +150,15 @@ class HemicubeAtlas:
         self.framebuffer = res.framebuffer([self.item_texture], self.depth)
 
     def draw(self, hemicube_frames) -> None:
-        """Draw the hemi-cubes at `hemicube_frames` (centre, x, y, pole arrays; at most `slots`)."""
+        """Draw the hemi-cubes at `hemicube_frames` (centre, x, y, pole arrays; at most `slots`),
+        unless the atlas holds just those already (a kept atlas shot from the same pieces again)."""
         ctx = self.ctx
+        frames = tuple(np.array(v, dtype=np.float64) for v in hemicube_frames)
+        if self.drawn_frames is not None and all(
+                a.shape == b.shape and np.array_equal(a, b) for a, b in zip(frames, self.drawn_frames)):
+            self.draws_skipped += 1
+            return
+        self.drawn_frames = None  # until drawn
         count = len(hemicube_frames[0])
         instances = face_instances(hemicube_frames, self.resolution, self.tiles_per_row, self.atlas_size)
         self.instance_buffer.write(instances.tobytes())
@@ -168,6 +177,7 @@ class HemicubeAtlas:
             self.command_buffer.orphan(commands.nbytes)
         self.command_buffer.write(commands.tobytes())
         render_indirect(self.vao, self.command_buffer, len(commands))
+        self.drawn_frames = frames
 
     def bind(self, unit: int) -> None:
         self.item_texture.use(unit)

@@ -82,6 +82,7 @@ class VisibilityMap:
         self.distances = res.scratch_texture((resolution, resolution), 1, dtype="f4")
         self.depth = res.scratch_depth((resolution, resolution))
         self.framebuffer = res.framebuffer([self.items, self.distances], self.depth)
+        self.drawn_view = None  # (eye, axes, skip, ortho extent) the map shows now
 
     @staticmethod
     def _link(gpu, n: int):
@@ -104,6 +105,11 @@ class VisibilityMap:
         with it its back) is left out.
         With `ortho_extent` > 0 the projection is orthographic along the pole (a sun)."""
         ctx = self.ctx
+        view = (tuple(map(float, eye)), tuple(tuple(map(float, axis)) for axis in axes), int(skip_patch),
+                float(ortho_extent))
+        if view == self.drawn_view:
+            return  # a kept map shows this view already
+        self.drawn_view = None
         uniforms = {"near": 0.0, "far": 2.0 * self.scene_diameter, "ortho_extent": float(ortho_extent),
                     "eye": tuple(map(float, eye)), "skip_patch": int(skip_patch)}
         uniforms.update((name, tuple(map(float, axis))) for name, axis in zip(("axis_x", "axis_y", "axis_z"), axes))
@@ -113,6 +119,7 @@ class VisibilityMap:
         self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
         ctx.enable_only(ctx.DEPTH_TEST)
         render(self.vao, mode=ctx.LINES_ADJACENCY)
+        self.drawn_view = view
 
     def bind(self) -> None:
         """Bind the item buffer and the distance map for a pass that looks receivers up."""
