@@ -3,7 +3,7 @@ README's "Quality presets" tables are measured with.
 
     .venv/bin/python tools/measure_presets.py FILE.blend --output-dir out/presets \\
         --runs '{"quality": "draft"}' '{"quality": "good", "method": "hemicube"}' \\
-        [--reference 256] [--cycles 16 64]
+        [--reference 256] [--cycles 16 64] [--rounds 5]
 
 FILE is baked as its author made it. Meshes without a 'Lightmap' UV map get one first, made by
 the add-on's own Lightmap Pack, saved as DIR/<name>.blend: every bake and Cycles' reference use
@@ -11,7 +11,9 @@ that copy, so both fill the same texels. Each run is the add-on's headless bake 
 settings and the run's replaced (content: combined, B), timed as a whole; the reference is Cycles'
 Combined bake at `--reference` samples per seed, two seeds (bench/blend_reference.py, cached in
 DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, baked and timed in this run, with a seed
-of their own (`blend_reference.ROW_SEED`: not correlated with the reference). The comparison
+of their own (`blend_reference.ROW_SEED`: not correlated with the reference). With `--rounds N`
+every run and every row is baked N times, in turn (ours, then Cycles', N times over), and each
+one's median time is reported: this machine's speed drifts by tens of per cent within minutes. The comparison
 (bench/compare.py) gives the texel RMS over all texels and over those inside the room (a room of
 bench/rooms.py; elsewhere the same), the object-balanced RMS (each object's error relative to its
 own brightness, counted by its texels) and that with the reference's noise taken out, and the
@@ -32,6 +34,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import bpy  # noqa: E402
+import numpy as np  # noqa: E402
 
 from radiosity_addon.bench import blend_lightmaps, blend_reference, compare  # noqa: E402
 from radiosity_addon.bench.rooms import ROOM_PROPERTY  # noqa: E402
@@ -131,6 +134,8 @@ def main() -> int:
                         help="JSON objects of SolveSettings fields (a 'quality' first sets its preset)")
     parser.add_argument("--reference", type=int, default=256, help="Cycles samples per seed of the reference (two seeds)")
     parser.add_argument("--cycles", type=int, nargs="*", default=[16, 64], help="Cycles' own rows, at these samples")
+    parser.add_argument("--rounds", type=int, default=1,
+                        help="bake every run and every Cycles row this many times, in turn; report the median")
     parser.add_argument("--densities", type=float, nargs="*", default=[],
                         help="then time the first run and Cycles at the first --cycles samples at these texel"
                              " densities (texels per unit): how each one's cost grows with the lightmaps' texels")
@@ -144,24 +149,38 @@ def main() -> int:
     path, is_room = with_lightmap_uvs(args.file, out / args.file.name)
     record: dict = {"file": str(args.file), "baked": str(path), "machine": {"cpus": os.cpu_count()}, "runs": []}
 
-    lightmaps = {}
-    for k, text in enumerate(args.runs):
-        run = json.loads(text)
-        solve = {key: value for key, value in run.items() if key != "lightmaps"}
-        load = os.getloadavg()[0]
-        started = time.perf_counter()
-        _, report = bake_file(HeadlessBake(str(path), solve_options=solve,
-                                           lightmap_options={**run.get("lightmaps", {}), "content": "combined"},
-                                           output_dir=str(out / f"run{k}")))
-        seconds = time.perf_counter() - started
-        names = [obj.name for obj in bpy.context.scene.objects if obj.type == "MESH"]
-        lightmaps[k] = blend_lightmaps.read_lightmaps(out / f"run{k}", names)
-        record["runs"].append({"label": label_of(run), "settings": run, "seconds": seconds, "load_average": load,
-                               "method": report["method"], "patches": report["counts"]["patches"],
-                               "solve_seconds": report["timings"]["total"], "shots": report.get("shots")})
-        log(f"{label_of(run)}: {report['method']}, {report['counts']['patches']} patches, {seconds:.1f} s")
+    # every round bakes each run, then each Cycles row: a slower or faster minute of the machine
+    # falls on both alike, and the median of the rounds is the time reported (each round's in the json)
+    lightmaps, cycles_images, times = {}, {}, {}
+    for round_number in range(args.rounds):
+        for k, text in enumerate(args.runs):
+            run = json.loads(text)
+            solve = {key: value for key, value in run.items() if key != "lightmaps"}
+            load = os.getloadavg()[0]
+            started = time.perf_counter()
+            _, report = bake_file(HeadlessBake(str(path), solve_options=solve,
+                                               lightmap_options={**run.get("lightmaps", {}), "content": "combined"},
+                                               output_dir=str(out / f"run{k}")))
+            times.setdefault(("run", k), []).append(time.perf_counter() - started)
+            if round_number == 0:
+                names = [obj.name for obj in bpy.context.scene.objects if obj.type == "MESH"]
+                lightmaps[k] = blend_lightmaps.read_lightmaps(out / f"run{k}", names)
+                record["runs"].append({"label": label_of(run), "settings": run, "load_average": load,
+                                       "method": report["method"], "patches": report["counts"]["patches"],
+                                       "solve_seconds": report["timings"]["total"], "shots": report.get("shots")})
+            log(f"{label_of(run)}: {report['method']}, {report['counts']['patches']} patches, "
+                f"{times[('run', k)][-1]:.1f} s")
+        if round_number == 0:
+            sizes = blend_lightmaps.sizes_of(lightmaps[0])
+        for samples in args.cycles:
+            # never from the cache: a row's seconds must be measured in this run, beside ours
+            bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, blend_reference.ROW_SEED)
+            times.setdefault(("cycles", samples), []).append(bake["seconds"])
+            cycles_images.setdefault(samples, bake["images"])
+            log(f"Cycles {samples} samples: {bake['seconds']:.1f} s")
+    for k, entry in enumerate(record["runs"]):
+        entry.update(seconds=float(np.median(times[("run", k)])), rounds=times[("run", k)])
 
-    sizes = blend_lightmaps.sizes_of(lightmaps[0])
     reference = blend_reference.reference_with_noise(path, sizes, "combined", args.reference, cache_dir=out / "cache")
     positions, _ = blend_lightmaps.texel_geometry(sizes)
     inside = blend_lightmaps.inside_room(positions) if is_room else None
@@ -173,11 +192,11 @@ def main() -> int:
                                reference["images"], compare.common_texels(reference["images"], reference["images"]))}
     rows = [(entry, lightmaps[k]) for k, entry in enumerate(record["runs"])]
     for samples in args.cycles:
-        # never from the cache: a row's seconds must be measured in this run, beside ours
-        bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, blend_reference.ROW_SEED)
-        entry = {"label": f"Cycles {samples} samples", "seconds": bake["seconds"], "method": "cycles"}
+        seconds = times[("cycles", samples)]
+        entry = {"label": f"Cycles {samples} samples", "seconds": float(np.median(seconds)), "rounds": seconds,
+                 "method": "cycles"}
         record["runs"].append(entry)
-        rows.append((entry, bake["images"]))
+        rows.append((entry, cycles_images[samples]))
     print(f"reference: Cycles {args.reference} samples x 2 seeds, noise {100 * record['reference']['noise']:.1f} %"
           f" (object-balanced {100 * record['reference']['balanced_noise']:.1f} %)")
     print("| run | method | patches | seconds | texel RMS all / inside | object-balanced (noise out) | worst object mean |")
