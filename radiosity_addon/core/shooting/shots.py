@@ -113,14 +113,16 @@ class ShotVisibility:
     list into batches this can take."""
 
     def __init__(self, res: Resources, patches: Patches, resolution: int, variant: str, scene_diameter: float,
-                 occlusion: bool = True, capacity: int = MAX_SHOTS, kept_as: tuple | None = None):
+                 occlusion: bool = True, capacity: int = MAX_SHOTS, kept_as: tuple | None = None,
+                 skip_of: np.ndarray | None = None):
         """The item buffers show `patches`; `kept_as` (a key naming them, e.g. `surface_visibility`'s):
-        the atlas and the map are the GPU's kept ones for it (`GPU.kept`), not this scope's."""
+        the atlas and the map are the GPU's kept ones for it (`GPU.kept`), not this scope's;
+        `skip_of`: a shooter's patch -> the item a map leaves out for it (`patches.drawn`)."""
         self.res, self.patches, self.resolution, self.occlusion = res, patches, resolution, occlusion
         self.variant, self.diameter = VARIANTS[variant], scene_diameter
         self.name = variant
         self.kept_as = kept_as
-        self.skip_of = patches.drawn  # a shooter's patch -> the item a map leaves out for it
+        self.skip_of = patches.drawn if skip_of is None else skip_of
         self.atlas = None
         self._map = None
         if self.variant.hemicube:
@@ -226,7 +228,6 @@ def surface_visibility(res: Resources, scene: Scene, patches: Patches, resolutio
     surfaces = surface_patches(scene, patches)
     digest = hashlib.sha1(np.ascontiguousarray(surfaces.corners).tobytes())
     digest.update(np.ascontiguousarray(surfaces.twin).tobytes())
-    visibility = ShotVisibility(res, surfaces, resolution, variant, scene.diameter, occlusion, capacity,
-                                kept_as=("surfaces", digest.hexdigest()))
-    visibility.skip_of = np.asarray(patches.surface)  # a patch's surface: item k is surface k's front
-    return visibility
+    # a shooter's patch leaves out its surface: item k is surface k's front
+    return ShotVisibility(res, surfaces, resolution, variant, scene.diameter, occlusion, capacity,
+                          kept_as=("surfaces", digest.hexdigest()), skip_of=np.asarray(patches.surface))
