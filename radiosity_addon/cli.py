@@ -192,7 +192,9 @@ def command_bake(args) -> int:
         raise SolveError("the bake command needs the Blender Python module: pip install bpy==5.0.1"
                          " (Python 3.11), or run it inside Blender (see the README)") from None
     from .blender.headless import HeadlessBake, bake_file
+    from .blender.worker import keep_spare
 
+    keep_spare(False)  # one bake, then the process ends: no solver process started ahead for a next
     progress = print_progress(args.quiet)
     lightmap_options = {field: getattr(args, field) for field in ("texel_density", "max_size", "content")
                         if getattr(args, field, None) is not None}

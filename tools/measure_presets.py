@@ -13,7 +13,10 @@ Combined bake at `--reference` samples per seed, two seeds (bench/blend_referenc
 DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, baked and timed in this run, with a seed
 of their own (`blend_reference.ROW_SEED`: not correlated with the reference). With `--rounds N`
 every run and every row is baked N times, in turn (ours, then Cycles', N times over), and each
-one's median time is reported: this machine's speed drifts by tens of per cent within minutes. The comparison
+one's median time is reported: this machine's speed drifts by tens of per cent within minutes.
+Every bake, ours and Cycles', starts once the solver process our last bake started ahead is
+ready (blender/worker.py's spare), as a user's next bake finds it; the session's first bake,
+which starts its own, is in the json as "first_bake". The comparison
 (bench/compare.py) gives the texel RMS over all texels and over those inside the room (a room of
 bench/rooms.py; elsewhere the same), the object-balanced RMS (each object's error relative to its
 own brightness, counted by its texels) and that with the reference's noise taken out, and the
@@ -38,6 +41,7 @@ import numpy as np  # noqa: E402
 
 from radiosity_addon.bench import blend_lightmaps, blend_reference, compare  # noqa: E402
 from radiosity_addon.bench.rooms import ROOM_PROPERTY  # noqa: E402
+from radiosity_addon.blender import worker  # noqa: E402
 from radiosity_addon.blender.headless import HeadlessBake, bake_file, ensure_registered  # noqa: E402
 from radiosity_addon.blender.lightmap_uv import add_lightmap_uvs  # noqa: E402
 
@@ -157,11 +161,14 @@ def main() -> int:
             run = json.loads(text)
             solve = {key: value for key, value in run.items() if key != "lightmaps"}
             load = os.getloadavg()[0]
+            spare = worker.wait_for_spare(60)  # as a user's next bake finds it (worker.py)
             started = time.perf_counter()
             _, report = bake_file(HeadlessBake(str(path), solve_options=solve,
                                                lightmap_options={**run.get("lightmaps", {}), "content": "combined"},
                                                output_dir=str(out / f"run{k}")))
             times.setdefault(("run", k), []).append(time.perf_counter() - started)
+            if not spare:  # the session's first bake: its solver process started with it
+                record["first_bake"] = {"label": label_of(run), "seconds": times[("run", k)][-1]}
             if round_number == 0:
                 names = [obj.name for obj in bpy.context.scene.objects if obj.type == "MESH"]
                 lightmaps[k] = blend_lightmaps.read_lightmaps(out / f"run{k}", names)
@@ -173,7 +180,9 @@ def main() -> int:
         if round_number == 0:
             sizes = blend_lightmaps.sizes_of(lightmaps[0])
         for samples in args.cycles:
-            # never from the cache: a row's seconds must be measured in this run, beside ours
+            # never from the cache: a row's seconds must be measured in this run, beside ours;
+            # not while our spare still starts (it would take CPU from Cycles)
+            worker.wait_for_spare(60)
             bake = blend_reference.cycles_lightmaps(path, sizes, "combined", samples, blend_reference.ROW_SEED)
             times.setdefault(("cycles", samples), []).append(bake["seconds"])
             cycles_images.setdefault(samples, bake["images"])
@@ -199,6 +208,9 @@ def main() -> int:
         rows.append((entry, cycles_images[samples]))
     print(f"reference: Cycles {args.reference} samples x 2 seeds, noise {100 * record['reference']['noise']:.1f} %"
           f" (object-balanced {100 * record['reference']['balanced_noise']:.1f} %)")
+    if "first_bake" in record:
+        print(f"the session's first bake ({record['first_bake']['label']}, its solver process started with it):"
+              f" {record['first_bake']['seconds']:.2f} s")
     print("| run | method | patches | seconds | texel RMS all / inside | object-balanced (noise out) | worst object mean |")
     print("|---|---|---:|---:|---:|---:|---|")
     for entry, images in rows:

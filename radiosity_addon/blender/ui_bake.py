@@ -17,6 +17,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .bake import BakePlan, finish, rollback, show_preview, start
+from .worker import end_spare
 
 TIMER_INTERVAL = 0.1  # seconds between the modal timer's ticks
 REDRAW_INTERVAL = 0.25  # at most four redraws of the panel and status bar a second (llvmpipe: ~30 ms each)
@@ -154,3 +155,4 @@ HANDLERS = ((bpy.app.handlers.load_pre, _on_load_pre), (bpy.app.handlers.save_pr
 
 def unregister() -> None:
     interrupt("the add-on was disabled")
+    end_spare()  # after the interrupt: its rollback may have started one

@@ -6,6 +6,13 @@ runs in Blender's own Python, started with the extension's path and Blender's `s
 and moderngl from the extension's wheels). A reader thread, idle on the pipe, turns the child's
 messages into state; the main thread only polls it (the modal timer, or a script's wait loop),
 so it never waits on the child. The images come back as files in a temporary folder.
+
+Every bake but the first of a session takes a spare: a child started when the previous bake ended,
+its imports done and its OpenGL context open, waiting for a job folder (solver_process/child.py).
+One spare at most; it ends on its own after SPARE_IDLE seconds without a bake, with Blender, and
+when the add-on is disabled. A bake takes it only if it was started with the command this one
+would use (the same interpreter, path and bootstrap), else it ends it and starts a child of its own.
+The bake is over when the result comes: the child's release of its context is not waited for.
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ from pathlib import Path
 
 from ..core import LightmapSettings, Scene, SolveCancelled, SolveSettings
 from ..solver_process import protocol
+from ..solver_process.child import SPARE
 from .errors import BakeError
 from .progress import BakeClock
 
@@ -42,11 +50,93 @@ def extension_root() -> Path:
     return Path(__file__).resolve().parents[2]
 
 
-def child_command(directory: Path) -> list[str]:
+def child_command(directory: Path | None) -> list[str]:
     """Blender's Python (sys.executable in Blender 2.91+; the bpy module's interpreter otherwise),
-    isolated from the user's PYTHON* variables, with this process's import path."""
+    isolated from the user's PYTHON* variables, with this process's import path; directory None: a
+    spare's (it reads its job folder from stdin)."""
     path = [str(extension_root())] + [str(Path(p).resolve()) for p in sys.path if p]
-    return [sys.executable, "-I", "-c", BOOTSTRAP, json.dumps(path), str(directory)]
+    return [sys.executable, "-I", "-c", BOOTSTRAP, json.dumps(path), SPARE if directory is None else str(directory)]
+
+
+def launch(command: list[str]) -> subprocess.Popen:
+    return subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, encoding="utf-8",
+                            creationflags=WINDOWS_FLAGS)
+
+
+def end_process(process: subprocess.Popen) -> None:
+    """Kill `process` if it still runs and reap it (Windows removes no file of a running process)."""
+    if process.poll() is None:
+        process.kill()
+    try:
+        process.stdin.close()
+        process.wait(5.0)
+    except (OSError, subprocess.TimeoutExpired):
+        pass
+
+
+@dataclass
+class Spare:
+    command: list[str]  # what started it
+    process: subprocess.Popen
+    waiting: threading.Thread  # reads its first line, "ready", then ends: the rest is the bake's
+
+
+_spare: Spare | None = None
+_keep_spare = True
+
+
+def keep_spare(enabled: bool) -> None:
+    """Whether a bake's end starts a spare for the next (the command line's single bake: no)."""
+    global _keep_spare
+    _keep_spare = enabled
+    if not enabled:
+        end_spare()
+
+
+def start_spare() -> None:
+    """Start a spare for the next bake, unless one runs already."""
+    global _spare
+    if not _keep_spare or (_spare is not None and _spare.process.poll() is None):
+        return
+    command = child_command(None)
+    try:
+        process = launch(command)
+    except OSError:  # no spare then: the next bake starts its own child and says why it cannot
+        _spare = None
+        return
+    waiting = threading.Thread(target=process.stdout.readline, name="radiosity-spare-ready", daemon=True)
+    waiting.start()
+    _spare = Spare(command, process, waiting)
+
+
+def wait_for_spare(timeout: float) -> bool:
+    """Wait until the spare, if any, is ready (its imports done, its context open); True if one is.
+    For measurements: a user's next bake comes seconds after the last, when it is long ready."""
+    if _spare is None:
+        return False
+    _spare.waiting.join(timeout)
+    return not _spare.waiting.is_alive() and _spare.process.poll() is None
+
+
+def take_spare() -> Spare | None:
+    """The spare, if it runs and was started with the command a bake would use now; else None
+    (and a spare that does not fit is ended)."""
+    global _spare
+    spare, _spare = _spare, None
+    if spare is None:
+        return None
+    if spare.command == child_command(None) and spare.process.poll() is None:
+        return spare
+    end_process(spare.process)
+    return None
+
+
+def end_spare() -> None:
+    """End the spare, if any (the add-on is disabled)."""
+    global _spare
+    spare, _spare = _spare, None
+    if spare is not None:
+        end_process(spare.process)
 
 
 @dataclass
@@ -82,6 +172,7 @@ class BakeWorker:
         self.cancelled = False
         self.directory: Path | None = None
         self._process: subprocess.Popen | None = None
+        self._spare_waiting: threading.Thread | None = None
         self._reader: threading.Thread | None = None
         self._lock = threading.Lock()
         self._messages: list[dict] = []  # read, not yet handled by the main thread
@@ -93,15 +184,28 @@ class BakeWorker:
         self.directory = Path(tempfile.mkdtemp(prefix="radiosity-bake-"))
         protocol.write_job(self.directory, self.scene, self.settings, self.lightmaps, self.objects,
                            self.preview_interval)
-        self._process = subprocess.Popen(child_command(self.directory), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                         text=True, encoding="utf-8",
-                                         creationflags=WINDOWS_FLAGS)
+        self._process = self._handed_to_spare() or launch(child_command(self.directory))
         self._last_heard = time.monotonic()
         self._reader = threading.Thread(target=self._read, name="radiosity-bake-pipe", daemon=True)
         self._reader.start()
         return self
 
+    def _handed_to_spare(self) -> subprocess.Popen | None:
+        spare = take_spare()
+        if spare is None:
+            return None
+        try:
+            spare.process.stdin.write(json.dumps(str(self.directory)) + "\n")
+            spare.process.stdin.flush()
+        except OSError:  # it ended in between
+            end_process(spare.process)
+            return None
+        self._spare_waiting = spare.waiting
+        return spare.process
+
     def _read(self) -> None:
+        if self._spare_waiting is not None:  # a spare's "ready" is read by its own thread first
+            self._spare_waiting.join()
         for line in self._process.stdout:
             message = protocol.decode(line)
             if message is not None:
@@ -123,6 +227,9 @@ class BakeWorker:
             silent = time.monotonic() - self._last_heard
         for message in messages:
             self._handle(message)
+        if self.result is not None:  # what the bake waits for: the child's teardown is not
+            self._over = True
+            return True
         if self._process.poll() is None:
             if silent > SILENCE_LIMIT and self.error is None:
                 self.error = BakeError(f"the solver stopped responding for {silent:.0f} s (a hung OpenGL driver?);"
@@ -185,13 +292,9 @@ class BakeWorker:
     def discard(self) -> None:
         """End the child (if it still runs) and remove its files; the result is dropped."""
         if self._process is not None:
-            if self._process.poll() is None:
-                self._process.kill()
-            try:
-                self._process.stdin.close()
-                self._process.wait(5.0)  # Windows removes no file of a running process
-            except (OSError, subprocess.TimeoutExpired):
-                pass
+            end_process(self._process)
         self._over = True
         if self.directory is not None:
             shutil.rmtree(self.directory, ignore_errors=True)
+        if self._process is not None:
+            start_spare()  # for the next bake, now that this one no longer needs the CPU

@@ -5,14 +5,17 @@ Job folder: scene.json (the scene file format, docs/architecture.md), materials.
 objects' albedo and emission maps, as Cycles baked them), job.json (settings, the objects that get
 lightmaps, the preview interval); the child adds result.npz and preview-N.npz.
 Messages (child -> parent): {"kind": KIND, ...} with KIND one of
+  ready     a spare's first word: its imports are done and its context open (it sends no
+            other until its job folder comes)
   alive     a heartbeat, every HEARTBEAT seconds, from a thread of its own
   progress  fraction, message, eta (seconds the solver expects to need, or null)
   stage     name ("lightmaps": the solve is done, the images are being laid out)
   preview   file (an .npz of the images so far, the ambient term included)
   result    file (.npz), report (Report.to_dict()), summary (Report.summary_line())
   error     user (a fault the user can fix, else a bug or a crash), message (one line)
-Parent -> child: nothing; its stdin closing (the parent is gone) ends the child at once, and a
-cancel kills it (it writes nothing outside its own folder).
+Parent -> child: a spare (a child started ahead, with `-` for its job folder) reads its folder as
+one JSON string and a newline on stdin; nothing else. Its stdin closing (the parent is gone) ends
+the child at once, and a cancel kills it (it writes nothing outside its own folder).
 """
 
 from __future__ import annotations
