@@ -88,7 +88,7 @@ def element_form_factors(gpu: GPU, patches: Patches, elements: int, resolution: 
             result[chosen] = block
         return result
     with gpu.resources() as res:
-        renderer = HemicubeRenderer(res, patches, resolution, scene_diameter)
+        renderer = HemicubeRenderer(res, patches, resolution, scene_diameter, used_slots=count)
         for first in range(0, count, renderer.slots):
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
