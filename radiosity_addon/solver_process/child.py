@@ -55,7 +55,10 @@ def watch_parent(jobs: queue.Queue) -> None:
     or crashed): end at once, whatever the solver is doing. (A cancel simply kills this process: it
     writes nothing outside its folder.)"""
     for line in sys.stdin:
-        jobs.put(json.loads(line))
+        try:
+            jobs.put(json.loads(line))
+        except ValueError:  # not a job: never stop watching for the parent's end over it
+            continue
     os._exit(3)
 
 
