@@ -20,7 +20,7 @@ QUALITIES = ("draft", "good", "final")
 # costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft 6.4 % in 15-20 s,
 # good 5.1 % in 16-26 s, final 4.6 % in 157-197 s on the 2-core machine of 2026-12-07; on the Cornell box
 # 2.5 / 2.2 / 2.3 % texel RMS, 6.6 / 5.3 / 4.9 % object-balanced, in 0.6 / 0.8 / 1.1 s, medians). The
-# hemi-cubes: 32 pixels, one per patch. They carry only the reflected light (the direct light is measured
+# hemi-cubes: 32 pixels (final: 24), one per patch. They carry only the reflected light (the direct light is measured
 # at 4 x 4 points a patch: hemicube/method.py), which is smooth: the emissive-ceiling sample's crate is
 # within 1.5 % of Cycles at 16, 32 and 64 pixels (when the hemi-cubes carried the emitters too, 32 pixels
 # left it and its light 6-9 % under), the Cornell box 2.5 % at 32 and 64 pixels, 2.9 % at 16; 128 pixels
@@ -46,11 +46,15 @@ QUALITY_PRESETS = {
     # for 8.1 s of lightmaps instead of 4.4 (the Cornell box 2.2 % either way; the penumbrae alike to the eye).
     # final's probe and texel pass take emitters in 4 x 4 pieces: 8 x 8 gave the same error on
     # the 4k room (4.6 %) and the Cornell box (2.2 %) for 24 % more time on the room (README)
+    # final's hemi-cubes are 24 pixels and its sharp texels take 2 x 2 points (32 and 4 x 4 until
+    # 2026-12-07): the Cornell box 2.29 -> 2.14 % texel RMS, 4.87 -> 4.91 % balanced, its solve and
+    # lightmaps ~0.1 s faster (16 pixels: 2.42 %, 4.98 %); the 4k room (progressive: no hemi-cubes)
+    # 4.56 % and 7.84 % balanced either way, its lightmaps 8.5 -> 6.6 s
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
-                        "hemicube_res": 32, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0,
+                        "hemicube_res": 24, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0,
                         "probe_pieces": 4},
               "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
-              "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 4, "direct_subsamples": 4}},
+              "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 4, "direct_subsamples": 2}},
 }
 DEFAULT_TOLERANCE = QUALITY_PRESETS["final"]["tolerance"]
 

@@ -45,10 +45,11 @@ from ..shooting.sky import element_frames
 BRIGHT_RATIO = 4.0
 MAX_BRIGHT_PATCHES = 96  # 8 and 48 left the Cornell box at 6.0 %
 COLUMN_POINTS = 2
-# the columns' shots' visibility at most this (hemi-cubes of 128 px): the receivers are far (FAR_SIZES)
+# the columns' shots' visibility at most this (hemi-cubes of 64 px): the receivers are far (FAR_SIZES)
 # and their light is averaged over an element; final's 512 took 0.19-0.28 s of the Cornell box's
-# solve, 256 0.12-0.18 s, 128 0.09-0.14 s, with the same errors to the digit (2.29 %, 4.87 % balanced)
-COLUMN_VISIBILITY_RES = 256
+# solve, 256 0.12-0.18 s, 128 0.09-0.14 s, with the same errors to the digit (2.29 %, 4.87 % balanced;
+# measured again on 2026-12-07: 128 gives 4.88 %)
+COLUMN_VISIBILITY_RES = 128
 WELL_SAMPLED = 0.01
 FAR_SIZES = 8.0
 MIN_POWER_SHARE = 0.2
