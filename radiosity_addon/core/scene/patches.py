@@ -16,12 +16,18 @@ Two ways to split (`SolveSettings`):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ..settings import MAX_SPLIT
 from .geometry import area_centroid, area_vector, bilinear, bilinear_each, reversed_corners
 from .model import Scene
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
 
 
 @dataclass
@@ -74,22 +80,24 @@ class Patches:
         """(P,) plane id: the surface for fronts, surfaces + surface for backs (the other side)."""
         return np.where(self.back_of >= 0, self.surface + len(self.split), self.surface)
 
-    @property
+    # the corners' measures, computed once (a solve asks for them some 200 times; a split makes new
+    # Patches, and nothing writes into a Patches' corners). Read-only, so a caller cannot spoil them.
+    @cached_property
     def area_vector(self) -> np.ndarray:
-        return area_vector(self.corners)
+        return _read_only(area_vector(self.corners))
 
-    @property
+    @cached_property
     def area(self) -> np.ndarray:
-        return np.linalg.norm(self.area_vector, axis=1)
+        return _read_only(np.linalg.norm(self.area_vector, axis=1))
 
-    @property
+    @cached_property
     def normal(self) -> np.ndarray:
         a = self.area_vector
-        return a / np.linalg.norm(a, axis=1, keepdims=True)
+        return _read_only(a / np.linalg.norm(a, axis=1, keepdims=True))
 
-    @property
+    @cached_property
     def center(self) -> np.ndarray:
-        return area_centroid(self.corners)
+        return _read_only(area_centroid(self.corners))
 
     def points(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Bilinear points of every patch at parameters s, t (broadcast): (P, *s.shape, 3)."""
