@@ -287,7 +287,7 @@ class BakeWorker:
 
     def wait(self, timeout: float | None = None) -> bool:
         """poll() until it returns True (then True) or `timeout` passes (False); woken by the child's
-        messages, not by a clock (a 20 ms sleep cost a Cornell bake of ~1 s 10 ms on average)."""
+        messages, not by a clock (a 20 ms sleep noticed the result 10 ms late on average)."""
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
             self._news.clear()  # before poll: a message that comes during it sets it again

@@ -109,16 +109,8 @@ def watched_bake(name: str, screenshots: bool):
             previews.append(round(time.monotonic() - started, 2))
         return images
     bake.plan.worker.take_preview = counting
-    module, ticks = ui_bake(), []  # the add-on's own main-thread time per modal tick
-    advance = module.advance
-
-    def timed_advance(running):
-        began = time.monotonic()
-        try:
-            return advance(running)
-        finally:
-            ticks.append(round(time.monotonic() - began, 4))
-    module.advance = timed_advance
+    ticks: list[float] = []  # the add-on's own main-thread time per modal tick
+    untimed = rig.timed_calls(ui_bake(), "advance", ticks)
     while ui_bake().running is bake:
         clock = bake.plan.worker.clock
         samples.append((round(time.monotonic() - started, 2), round(clock.fraction(), 3), clock.bar_text(),
@@ -130,7 +122,7 @@ def watched_bake(name: str, screenshots: bool):
                                ("status_bar_during_bake.png", "STATUSBAR")):
                 rig.shot(shot, kind)
         yield 0.1
-    module.advance = advance
+    untimed()
     yield 0.3
     ended = time.monotonic()
     solving = started + samples[-1][0]  # the last tick before the result is applied
@@ -145,7 +137,7 @@ def watched_bake(name: str, screenshots: bool):
                      "long_gaps": recorder.long_gaps(started, ended), "idle_ui": recorder.stats(started - 2.0, started),
                      "images": sorted(i.name for i in bpy.data.images),
                      "last_bake": bpy.context.scene.radiosity.last_bake,
-                     "tick_work": {"ticks": len(ticks), "max": max(ticks, default=None)}}
+                     "tick_work": {"ticks": len(ticks), "max": round(max(ticks), 4) if ticks else None}}
 
 
 def case_responsive():

@@ -30,15 +30,7 @@ def time_the_addons_ticks() -> None:
         ui_bake = rig.addon("blender.ui_bake")
     except KeyError:  # an add-on from before ui_bake: only the UI's side is measured
         return
-    advance = ui_bake.advance
-
-    def timed(bake):
-        started = time.monotonic()
-        try:
-            return advance(bake)
-        finally:
-            ticks_of_the_addon.append(time.monotonic() - started)
-    ui_bake.advance = timed
+    rig.timed_calls(ui_bake, "advance", ticks_of_the_addon)
 
 
 def baking() -> bool:

@@ -124,6 +124,21 @@ def file_state() -> dict:
     }
 
 
+def timed_calls(module, name: str, seconds: list):
+    """Wrap `module.name` so each call appends its seconds to `seconds` (the add-on's own main-thread
+    time, e.g. ui_bake.advance per modal tick); returns what puts the original back."""
+    original = getattr(module, name)
+
+    def timed(*args, **kwargs):
+        began = time.monotonic()
+        try:
+            return original(*args, **kwargs)
+        finally:
+            seconds.append(time.monotonic() - began)
+    setattr(module, name, timed)
+    return lambda: setattr(module, name, original)
+
+
 def modal_operators() -> list[str]:
     """The window's running modal operators ('(freed)': one whose type is unregistered)."""
     def name(op):
