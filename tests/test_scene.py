@@ -116,3 +116,19 @@ def test_a_world_colour_alone_counts_as_an_emitter_and_a_black_one_does_not():
     assert scene_from_dict({**dark, "world": {"color": [0.2, 0.3, 0.5]}}).extras["world"]["color"] == [0.2, 0.3, 0.5]
     with pytest.raises(SceneError, match="nothing emits"):
         scene_from_dict({**dark, "world": {"color": [0, 0, 0]}})
+
+
+@pytest.mark.parametrize("dtype", [np.int64, np.float64])
+def test_row_labels_are_np_uniques_inverse(dtype):
+    """scene.rows.row_labels: the labels np.unique(axis=0, return_inverse=True) gives, for integer
+    keys and float ones (-0.0 and 0.0 alike), and for no rows and one."""
+    from radiosity_addon.core.scene.rows import row_labels
+
+    rng = np.random.default_rng(11)
+    rows = (rng.integers(-4, 4, (3000, 6)) * 0.37).astype(dtype)
+    rows = np.concatenate([rows, rows[:1000]])
+    if dtype is np.float64:
+        rows[0, 0], rows[1, 0] = -0.0, 0.0
+    expected = np.unique(rows, axis=0, return_inverse=True)[1].ravel()
+    np.testing.assert_array_equal(row_labels(rows), expected)
+    assert row_labels(rows[:0]).shape == (0,) and list(row_labels(rows[:1])) == [0]

@@ -21,6 +21,7 @@ import numpy as np
 
 from .scene import Patches, split_patches
 from .scene.gaps import OPPOSED_COSINE, distance_to_outline, facing_partners
+from .scene.rows import row_labels
 from .shooting import MeasuredDirectLight, direct_light_at_elements, patch_scale_shots, same_shots
 from .uvspace import patch_material_values
 
@@ -167,8 +168,7 @@ def unchanged_patches(before: Patches, after: Patches) -> np.ndarray:
         return np.concatenate([patches.corners.reshape(len(patches), -1), patches.surface[:, None],
                                patches.is_back[:, None]], axis=1)
 
-    _, code = np.unique(np.concatenate([keys(before), keys(after)]), axis=0, return_inverse=True)
-    code = code.ravel()
+    code = row_labels(np.concatenate([keys(before), keys(after)]))
     of_code = np.full(code.max() + 1, -1, dtype=np.int64)
     of_code[code[:len(before)]] = np.arange(len(before))
     return of_code[code[len(before):]]

@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ..scene.geometry import bilinear
+from ..scene.rows import row_labels
 from ..errors import SolveError
 from ..solution import Solution
 
@@ -88,8 +89,7 @@ def continuous_lattice(corners: np.ndarray, patch_uv: np.ndarray, values: np.nda
     uv = np.round(bilinear(patch_uv, s[border], t[border]).reshape(-1, 2) / uv_quantum)
     owner = np.repeat(np.arange(count), per_patch)
     keys = np.concatenate([group[owner][:, None], world, uv], axis=1).astype(np.int64)
-    _, place = np.unique(keys, axis=0, return_inverse=True)  # same object, world and UV point
-    place = place.ravel()
+    place = row_labels(keys)  # same object, world and UV point
     _, pair_of_point = np.unique(owner * (place.max() + 1) + place, return_inverse=True)
     pair_of_point = pair_of_point.ravel()
     points_per_pair = np.bincount(pair_of_point)
@@ -99,13 +99,13 @@ def continuous_lattice(corners: np.ndarray, patch_uv: np.ndarray, values: np.nda
     first = np.zeros(len(points_per_pair), dtype=np.int64)
     first[pair_of_point[::-1]] = np.arange(len(pair_of_point))[::-1]  # a point of each pair
     pair_patch, pair_place = owner[first], place[first]
-    _, pair_world = np.unique(keys[first, :4], axis=0, return_inverse=True)  # object and world point
+    pair_world = row_labels(keys[first, :4])  # object and world point
     smooth = math.cos(math.radians(SMOOTH_EDGE_DEGREES))
 
     def joins(i, j):
         return (pair_place[i] == pair_place[j]) | (
             np.einsum("ij,ij->i", normals[pair_patch[i]], normals[pair_patch[j]]) > smooth)
 
-    total, joined = _sum_within_groups(pair_world.ravel(), joins, pair_value)
+    total, joined = _sum_within_groups(pair_world, joins, pair_value)
     lattice[:, border] = (total / joined[:, None])[pair_of_point].reshape(count, per_patch, 3)
     return lattice
