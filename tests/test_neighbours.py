@@ -54,3 +54,16 @@ def test_one_large_patch_does_not_make_every_small_one_a_candidate(monkeypatch):
     monkeypatch.setattr(neighbours.np.linalg, "norm", lambda a, axis=None: computed.append(len(a)) or norm(a, axis=axis))
     pairs = sum(len(q) for q, _ in near_pairs(centre, radius, queries, 2 * radius))
     assert sum(computed) < 20 * pairs, (sum(computed), pairs)
+
+
+def test_the_grids_small_chunks_come_joined(monkeypatch):
+    """One chunk per search while the pairs fit PAIR_CHUNK (not one per class pair and grid step:
+    a caller's numpy then runs once), and chunks of at least PAIR_CHUNK pairs but the last."""
+    rng = np.random.default_rng(5)
+    centre = rng.uniform(-2, 2, (1500, 3)) * np.array([1, 1, 0.05])
+    radius = np.exp(rng.uniform(np.log(1e-3), np.log(0.3), 1500))
+    queries = np.arange(1500)
+    assert len(list(near_pairs(centre, radius, queries, 2 * radius))) == 1
+    monkeypatch.setattr(neighbours, "PAIR_CHUNK", 500)
+    sizes = [len(q) for q, _ in near_pairs(centre, radius, queries, 2 * radius)]
+    assert len(sizes) > 3 and min(sizes[:-1]) >= 500
