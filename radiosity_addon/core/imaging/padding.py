@@ -16,35 +16,37 @@ _NEIGHBOURS = [(dy, dx, 1.0 if dy == 0 or dx == 0 else 1e-3)
                for dy in (-1, 0, 1) for dx in (-1, 0, 1) if (dy, dx) != (0, 0)]
 
 
-def _shifted(array: np.ndarray, dy: int, dx: int, fill) -> np.ndarray:
-    """array moved by (dy, dx): out[y, x] = array[y - dy, x - dx], `fill` where that is outside."""
-    out = np.full_like(array, fill)
-    h, w = array.shape[:2]
-    ys, yd = slice(max(0, -dy), h - max(0, dy)), slice(max(0, dy), h - max(0, -dy))
-    xs, xd = slice(max(0, -dx), w - max(0, dx)), slice(max(0, dx), w - max(0, -dx))
-    out[yd, xd] = array[ys, xs]
-    return out
-
-
 def dilate(values: np.ndarray, covered: np.ndarray, rings: int) -> tuple[np.ndarray, np.ndarray]:
     """Grow covered regions by `rings` texels: each new texel takes the weighted mean of its
     covered 8-neighbours (inside values only; edge neighbours weigh most). values (H, W, C), covered (H, W) bool.
-    Returns new (values, covered); texels never reached keep their values and stay uncovered."""
-    values = np.where(covered[..., None], values, 0).astype(np.float64)
-    covered = covered.copy()
+    Returns new (values, covered); texels never reached keep their values and stay uncovered.
+    Neighbours are read as views into copies with a border of one uncovered zero texel, not as
+    shifted copies: a ring allocates nothing per neighbour."""
+    h, w = covered.shape
+    border_values = np.zeros((h + 2, w + 2) + values.shape[2:], dtype=np.float64)
+    border_covered = np.zeros((h + 2, w + 2), dtype=bool)
+    inside = (slice(1, h + 1), slice(1, w + 1))
+    border_values[inside] = np.where(covered[..., None], values, 0)
+    border_covered[inside] = covered
+    values, covered = border_values[inside], border_covered[inside]  # views: updated in place
+    total = np.empty_like(values)
+    count = np.empty(covered.shape, dtype=np.float64)
+    neighbour_weight = np.empty(covered.shape, dtype=np.float64)
     for _ in range(rings):
-        total = np.zeros_like(values)
-        count = np.zeros(covered.shape, dtype=np.float64)
+        total.fill(0.0)
+        count.fill(0.0)
         for dy, dx, weight in _NEIGHBOURS:
-            neighbour_weight = weight * _shifted(covered, dy, dx, False)
-            total += neighbour_weight[..., None] * _shifted(values, dy, dx, 0.0)
+            # out[y, x] = in[y - dy, x - dx]
+            near = (slice(1 - dy, h + 1 - dy), slice(1 - dx, w + 1 - dx))
+            np.multiply(weight, border_covered[near], out=neighbour_weight)
+            total += neighbour_weight[..., None] * border_values[near]
             count += neighbour_weight
         grow = ~covered & (count > 0)
         if not grow.any():
             break
         values[grow] = total[grow] / count[grow][:, None]
-        covered = covered | grow
-    return values, covered
+        covered |= grow
+    return values.copy(), covered.copy()
 
 
 def downsample_weighted(values: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
