@@ -161,3 +161,29 @@ def test_scratch_targets_pass_from_scope_to_scope_and_leave_results_unchanged(wa
     assert {id(obj) for spares in watched._spares.values() for obj in spares} == kept
     np.testing.assert_array_equal(first.patch_radiosity, second.patch_radiosity)
     assert leaked(watched) == []
+
+
+def test_a_spares_warm_up_keeps_only_its_programs_and_changes_no_result(watched, monkeypatch):
+    """solver_process.child.warm_up: the bundled box solved and baked on the spare's context; what
+    stays is the compiled programs (no kept maps, no pooled targets), a solve after it is the
+    same bit for bit, and a warm-up that fails leaves the context as usable."""
+    from radiosity_addon.solver_process import child
+
+    scene = lit_room()
+    settings = replace(HEMICUBE, refinements=2)
+    with GPU() as cold:
+        expected = solve(scene, settings, gpu=cold)
+    assert child.warm_up(watched)
+    assert watched.program_count > 0 and watched.kept_count == 0 and watched.spare_bytes == 0
+    assert leaked(watched) == []
+    np.testing.assert_array_equal(solve(scene, settings, gpu=watched).patch_radiosity, expected.patch_radiosity)
+
+    def failing(*args, **kwargs):
+        raise Injected("warm-up")
+
+    with GPU() as other:
+        monkeypatch.setattr(child.core, "bake_lightmaps", failing)  # after the solve made its maps
+        assert not child.warm_up(other)
+        assert other.kept_count == 0 and other.spare_bytes == 0
+        monkeypatch.undo()
+        np.testing.assert_array_equal(solve(scene, settings, gpu=other).patch_radiosity, expected.patch_radiosity)

@@ -8,7 +8,8 @@ messages into state; the main thread only polls it (the modal timer, or a script
 so it never waits on the child. The images come back as files in a temporary folder.
 
 Every bake but the first of a session takes a spare: a child started when the previous bake ended,
-its imports done and its OpenGL context open, waiting for a job folder (solver_process/child.py).
+its imports done, its OpenGL context open and warmed by a small solve (its programs compiled),
+waiting for a job folder (solver_process/child.py).
 One spare at most; it ends on its own after SPARE_IDLE seconds without a bake, with Blender, and
 when the add-on is disabled. A bake takes it only if it was started with the command this one
 would use (the same interpreter, path and bootstrap), else it ends it and starts a child of its own.

@@ -171,7 +171,9 @@ class GPU:
             return
         self._spares.setdefault(key, []).append(obj)
 
-    def close(self) -> None:
+    def release_targets(self) -> None:
+        """Release what is kept between scopes (`kept` objects, pooled scratch targets) and keep
+        only the compiled programs: a context warmed by one job holds no memory for the next."""
         with active(self.ctx):
             for scope, _ in reversed(list(self._kept.values())):
                 scope.release()
@@ -180,6 +182,10 @@ class GPU:
                 for obj in spares:
                     obj.release()
             self._spares.clear()
+
+    def close(self) -> None:
+        self.release_targets()
+        with active(self.ctx):
             for program in self._programs.values():
                 program.release()
             self._programs.clear()
