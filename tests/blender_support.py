@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="radiosity-blender-user-")
@@ -117,6 +118,17 @@ def blend_state() -> dict:
                                "selected": obj.select_get()}
                     for obj in bpy.data.objects},
     }
+
+
+def gone_within(condition, seconds: float) -> bool:
+    """Whether `condition()` holds within `seconds` (a finished bake's solver process is reaped and
+    its folder removed on a thread: `BakeWorker.discard(wait=False)`)."""
+    deadline = time.monotonic() + seconds
+    while not condition():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.02)
+    return True
 
 
 def inject_into_solver(monkeypatch, code: str) -> None:

@@ -90,8 +90,10 @@ class ButtonBake:
         assert self.ui.window_manager.timers == [] and self.ui.window_manager.progress_ended
         assert self.status[-1] is None  # the status bar's own text is back
         assert not any(handler in handlers for handlers, handler in ui_bake.HANDLERS)
-        assert self.plan.worker._process.poll() is not None  # the solver process has ended
-        assert not self.plan.worker.directory.exists()  # and its files are gone
+        # the solver process has ended and its files are gone (after a bake that succeeded, a
+        # thread reaps it and removes them: within moments)
+        assert support.gone_within(lambda: self.plan.worker._process.poll() is not None
+                                   and not self.plan.worker.directory.exists(), 10)
         assert bpy.ops.radiosity.bake.poll()
 
 

@@ -183,7 +183,7 @@ def finish(plan: BakePlan) -> str:
         raise
     if plan.preview is not None:
         plan.preview.release()
-    worker.discard()
+    worker.discard(wait=False)  # its exit and its folder's removal on a thread: nothing waits for them
     seconds = time.monotonic() - plan.started
     plan.scene.radiosity.last_bake = result.summary
     return (f"baked {len(plan.objects)} object(s) in {seconds:.1f} s ({result.report['method']},"
