@@ -47,12 +47,23 @@ def bilinear_each(corners: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarr
 
 def tangent_frame(normal: np.ndarray, hint: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Unit x, y completing a right-handed frame (x, y, normal); x along `hint` when given."""
-    normal = np.asarray(normal, dtype=np.float64)
-    if hint is None or np.linalg.norm(np.cross(hint, normal)) < 1e-6:
-        hint = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = hint - np.dot(hint, normal) * normal
-    x /= np.linalg.norm(x)
-    return x, np.cross(normal, x)
+    x, y = tangent_axes(np.asarray(normal, dtype=np.float64)[None],
+                        np.zeros((1, 3)) if hint is None else np.asarray(hint, dtype=np.float64)[None])
+    return x[0], y[0]
+
+
+def tangent_axes(normals: np.ndarray, hints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit x, y (P, 3) completing right-handed frames (x, y, normal) for the rows of `normals`,
+    each x along its row of `hints` (P, 3) unless that is (nearly) parallel to the normal, or zero.
+    All rows at once: `tangent_frame` costs ~50 us of numpy's small-array overhead a call, and a
+    progressive solve shoots thousands of patches (`shooting.PatchShooters`)."""
+    normals, hints = np.asarray(normals, dtype=np.float64), np.asarray(hints, dtype=np.float64)
+    loose = np.linalg.norm(np.cross(hints, normals), axis=1) < 1e-6
+    fallback = np.where((np.abs(normals[:, 0]) < 0.9)[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    hints = np.where(loose[:, None], fallback, hints)
+    x = hints - np.einsum("pd,pd->p", hints, normals)[:, None] * normals
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    return x, np.cross(normals, x)
 
 
 def tangent_frames(points: np.ndarray, normals: np.ndarray, edges: np.ndarray):

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Patches
-from ..scene.geometry import bilinear, tangent_frame
+from ..scene.geometry import bilinear, tangent_axes
 
 # shooter kinds, as shoot_to_elements.comp knows them
 POLYGON, POINT_LAMP, DIRECTIONAL, SKY = 0, 1, 2, 3
@@ -44,12 +44,12 @@ class PatchShooters:
         self.normal = patches.normal
         self.center = patches.center
         self.area = patches.area
+        self.x, self.y = tangent_axes(self.normal, self.corners[:, 1] - self.corners[:, 0])
 
     def shooter(self, index: int, radiosity: np.ndarray, eye_parameters=None) -> Shooter:
         """Patch `index` shooting `radiosity`; its visibility map is rendered from its centre, or
         from the bilinear point at `eye_parameters` (s, t) (the centroid of its unshot power)."""
-        normal = self.normal[index]
-        x, y = tangent_frame(normal, self.corners[index, 1] - self.corners[index, 0])
+        normal, x, y = self.normal[index], self.x[index], self.y[index]
         if eye_parameters is None:
             position = self.center[index]
         else:
