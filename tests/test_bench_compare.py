@@ -117,3 +117,16 @@ def test_inside_box_with_margin_and_uncovered_texels():
     positions = np.array([[(0.5, 0.5, 0.5), (-0.005, 0.2, 0.2), (-0.05, 0.2, 0.2), (np.nan, np.nan, np.nan)]])
     inside = compare.inside_box(positions, (0, 0, 0), (1, 1, 1), margin=0.01)
     assert inside.tolist() == [[True, True, False, False]]
+
+
+def test_cycles_to_reach_interpolates_between_the_rows_that_bracket_the_error():
+    """error = 0.4 n^-0.5 and seconds = 0.2 + 0.02 n are recovered exactly between rows; an
+    error outside the rows has no answer."""
+    rows = [(n, 0.2 + 0.02 * n, 0.4 * n ** -0.5) for n in (16, 64, 80, 96, 256)]
+    reached = compare.cycles_to_reach(0.05, rows[::-1])  # 64 samples
+    assert reached["between"] == (16, 64)
+    assert reached["samples"] == pytest.approx(64.0) and reached["seconds"] == pytest.approx(1.48)
+    reached = compare.cycles_to_reach(0.4 * 90 ** -0.5, rows)
+    assert reached["between"] == (80, 96)
+    assert reached["samples"] == pytest.approx(90.0) and reached["seconds"] == pytest.approx(2.0)
+    assert compare.cycles_to_reach(0.2, rows) is None and compare.cycles_to_reach(0.01, rows) is None

@@ -20,7 +20,11 @@ which starts its own, is in the json as "first_bake". The comparison
 (bench/compare.py) gives the texel RMS over all texels and over those inside the room (a room of
 bench/rooms.py; elsewhere the same), the object-balanced RMS (each object's error relative to its
 own brightness, counted by its texels) and that with the reference's noise taken out, and the
-worst object's mean. `--densities` then times the
+worst object's mean. Then, from Cycles' rows of the run (`compare.cycles_to_reach`: samples
+interpolated as a power law between the two rows that bracket an error, seconds linear in the
+samples), the samples and seconds Cycles needs for each run's texel RMS and for `--target-error`
+(5 %), and each run's seconds against half the latter — the Cornell box's target, "the bar".
+`--densities` then times the
 first run and Cycles at the first `--cycles` samples at other texel densities. Writes
 DIR/presets.json and DIR/presets.png (error against time; `--replot` redraws it from the json).
 """
@@ -130,6 +134,27 @@ def plot(path: Path, record: dict) -> None:
     figure.savefig(path, dpi=110)
 
 
+def print_cycles_equivalents(record: dict, cycles_rows: list, target_error: float) -> None:
+    """What Cycles needs to reach each run's texel RMS and `target_error` (`compare.cycles_to_reach`,
+    between its rows of this run), and each run's seconds against half the latter: the bar."""
+    bar = compare.cycles_to_reach(target_error, cycles_rows)
+    record["bar"] = None if bar is None else {"target_error": target_error, **bar, "half": bar["seconds"] / 2}
+    if bar is not None:
+        print(f"Cycles reaches {100 * target_error:g} % texel RMS at about {bar['samples']:.0f} samples,"
+              f" {bar['seconds']:.2f} s (between its {bar['between'][0]} and {bar['between'][1]} sample rows);"
+              f" half of that, the bar: {bar['seconds'] / 2:.2f} s")
+    for entry in record["runs"]:
+        if entry["method"] == "cycles":
+            continue
+        same = compare.cycles_to_reach(entry["texel_rms"], cycles_rows)
+        entry["cycles_to_same_error"] = same
+        to_same = ("outside Cycles' rows" if same is None else
+                   f"Cycles needs about {same['samples']:.0f} samples, {same['seconds']:.2f} s:"
+                   f" {same['seconds'] / entry['seconds']:.1f} x the time")
+        against_bar = "" if bar is None else f"; {entry['seconds'] / (bar['seconds'] / 2):.2f} x the bar"
+        print(f"{entry['label']}: {entry['seconds']:.2f} s for {100 * entry['texel_rms']:.1f} %; {to_same}{against_bar}")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("file", type=Path)
@@ -143,6 +168,9 @@ def main() -> int:
     parser.add_argument("--densities", type=float, nargs="*", default=[],
                         help="then time the first run and Cycles at the first --cycles samples at these texel"
                              " densities (texels per unit): how each one's cost grows with the lightmaps' texels")
+    parser.add_argument("--target-error", type=float, default=0.05,
+                        help="texel RMS for the bar: the seconds Cycles needs to reach it, interpolated between its"
+                             " rows, and each run's seconds against half of them (the Cornell box's target)")
     parser.add_argument("--replot", action="store_true", help="only redraw DIR/presets.png from DIR/presets.json")
     args = parser.parse_args()
     out = args.output_dir
@@ -223,6 +251,9 @@ def main() -> int:
         print(f"| {entry['label']} | {entry['method']} | {entry.get('patches', '')} | {entry['seconds']:.1f} "
               f"| {100 * entry['texel_rms']:.1f} % / {100 * entry['texel_rms_inside']:.1f} % "
               f"| {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) | {worst} {100 * error:+.0f} % |", flush=True)
+    cycles_rows = [(samples, entry["seconds"], entry["texel_rms"])
+                   for samples, (entry, _) in zip(args.cycles, rows[len(rows) - len(args.cycles):])]
+    print_cycles_equivalents(record, cycles_rows, args.target_error)
     if args.densities:
         record["densities"] = density_sweep(path, json.loads(args.runs[0]), args.cycles[0], args.densities, out)
     (out / "presets.json").write_text(json.dumps(record, indent=1, default=float))

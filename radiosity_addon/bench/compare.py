@@ -183,3 +183,18 @@ def inside_box(positions: np.ndarray, low, high, margin: float = 0.01) -> np.nda
     high = np.asarray(high, dtype=np.float64) + margin
     with np.errstate(invalid="ignore"):
         return np.all((positions >= low) & (positions <= high), axis=-1)
+
+
+def cycles_to_reach(error: float, rows: list[tuple[int, float, float]]) -> dict | None:
+    """What Cycles needs for `error`, from its rows (samples, seconds, error) of one run: the
+    samples between the two rows whose errors bracket it, interpolated as a power law (error ∝
+    samples^−a between them, a straight line in log–log), and the seconds at those samples,
+    linear in the samples between the same rows (a bake's time is a fixed part plus one per
+    sample). {"samples", "seconds", "between": (n0, n1)}, or None when no two rows bracket it."""
+    rows = sorted(rows)
+    for (n0, t0, e0), (n1, t1, e1) in zip(rows, rows[1:]):
+        if e1 < e0 and e1 <= error <= e0:
+            samples = n0 * (n1 / n0) ** (np.log(e0 / error) / np.log(e0 / e1))
+            seconds = t0 + (samples - n0) / (n1 - n0) * (t1 - t0)
+            return {"samples": float(samples), "seconds": float(seconds), "between": (n0, n1)}
+    return None
