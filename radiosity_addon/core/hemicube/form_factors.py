@@ -93,7 +93,7 @@ def element_form_factors(gpu: GPU, patches: Patches, elements: int, resolution: 
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
             batch = tuple(v[first:first + renderer.slots] for v in frames)
-            result[first:first + len(batch[0])] = renderer.coverage(batch, np.float32)[:, :-1]
+            renderer.coverage(batch, np.float32, out=result[first:first + len(batch[0])])  # the fronts' columns
             if progress is not None:
                 done = first + len(batch[0])
                 progress(done / count, f"hemi-cubes {done}/{count}", {"hemicubes": done})

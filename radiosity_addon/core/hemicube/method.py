@@ -165,7 +165,7 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
     light = direct + sky_light
     light[rows] += linear_solvers.widened_product(element_rows, reflected).reshape(len(rows), size, size, 3)
     elements = own_emission[:, None, None, :] + patches.reflectance[:, None, None, :] * light
-    row_sums = form_factors[rows].sum(axis=1, dtype="f8") if len(rows) else np.zeros(1)
+    row_sums = form_factors.sum(axis=1, dtype="f8")[rows] if len(rows) else np.zeros(1)  # no P x P copy
     details = HemicubeDetails(
         solver=monitor.name, iterations=monitor.iterations, relative_change=float(monitor.relative_change),
         residual=float(monitor.relative_change) if effects.interreflection else 0.0,
