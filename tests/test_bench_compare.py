@@ -130,3 +130,8 @@ def test_cycles_to_reach_interpolates_between_the_rows_that_bracket_the_error():
     assert reached["between"] == (80, 96)
     assert reached["samples"] == pytest.approx(90.0) and reached["seconds"] == pytest.approx(2.0)
     assert compare.cycles_to_reach(0.2, rows) is None and compare.cycles_to_reach(0.01, rows) is None
+
+
+def test_without_reference_noise_takes_the_noise_out_of_the_squared_error():
+    assert compare.without_reference_noise(0.05, 0.014) == pytest.approx((0.05 ** 2 - 0.014 ** 2) ** 0.5)
+    assert compare.without_reference_noise(0.01, 0.014) == 0.0

@@ -23,7 +23,9 @@ own brightness, counted by its texels) and that with the reference's noise taken
 worst object's mean. Then, from Cycles' rows of the run (`compare.cycles_to_reach`: samples
 interpolated as a power law between the two rows that bracket an error, seconds linear in the
 samples), the samples and seconds Cycles needs for each run's texel RMS and for `--target-error`
-(5 %), and each run's seconds against half the latter — the Cornell box's target, "the bar".
+(5 %), and each run's seconds against half the latter — the Cornell box's target, "the bar" — first
+against the reference as it is, then against a converged one (every texel RMS with the reference's
+noise taken out); `--reprint` prints them again from DIR/presets.json.
 `--densities` then times the
 first run and Cycles at the first `--cycles` samples at other texel densities. Writes
 DIR/presets.json and DIR/presets.png (error against time; `--replot` redraws it from the json).
@@ -134,25 +136,36 @@ def plot(path: Path, record: dict) -> None:
     figure.savefig(path, dpi=110)
 
 
-def print_cycles_equivalents(record: dict, cycles_rows: list, target_error: float) -> None:
+def print_cycles_equivalents(record: dict, target_error: float) -> None:
     """What Cycles needs to reach each run's texel RMS and `target_error` (`compare.cycles_to_reach`,
-    between its rows of this run), and each run's seconds against half the latter: the bar."""
-    bar = compare.cycles_to_reach(target_error, cycles_rows)
-    record["bar"] = None if bar is None else {"target_error": target_error, **bar, "half": bar["seconds"] / 2}
-    if bar is not None:
-        print(f"Cycles reaches {100 * target_error:g} % texel RMS at about {bar['samples']:.0f} samples,"
-              f" {bar['seconds']:.2f} s (between its {bar['between'][0]} and {bar['between'][1]} sample rows);"
-              f" half of that, the bar: {bar['seconds'] / 2:.2f} s")
-    for entry in record["runs"]:
-        if entry["method"] == "cycles":
-            continue
-        same = compare.cycles_to_reach(entry["texel_rms"], cycles_rows)
-        entry["cycles_to_same_error"] = same
-        to_same = ("outside Cycles' rows" if same is None else
-                   f"Cycles needs about {same['samples']:.0f} samples, {same['seconds']:.2f} s:"
-                   f" {same['seconds'] / entry['seconds']:.1f} x the time")
-        against_bar = "" if bar is None else f"; {entry['seconds'] / (bar['seconds'] / 2):.2f} x the bar"
-        print(f"{entry['label']}: {entry['seconds']:.2f} s for {100 * entry['texel_rms']:.1f} %; {to_same}{against_bar}")
+    between its rows of this run), and each run's seconds against half the latter: the bar. Then
+    the same against a converged reference (the target's words), every texel RMS with the
+    reference's noise taken out (`compare.without_reference_noise`)."""
+    noise = record["reference"]["noise"]
+    cycles = [entry for entry in record["runs"] if entry["method"] == "cycles"]
+    ours = [entry for entry in record["runs"] if entry["method"] != "cycles"]
+    for suffix, error_of, against in (("", lambda e: e, "its reference"),
+                                      ("_noise_out", lambda e: compare.without_reference_noise(e, noise),
+                                       f"a converged reference (its noise, {100 * noise:.1f} %, taken out)")):
+        rows = [(entry.get("samples") or int(entry["label"].split()[1]), entry["seconds"],
+                 error_of(entry["texel_rms"])) for entry in cycles]
+        bar = compare.cycles_to_reach(target_error, rows)
+        record["bar" + suffix] = None if bar is None else {"target_error": target_error, **bar,
+                                                           "half": bar["seconds"] / 2}
+        print(f"Against {against}:")
+        if bar is not None:
+            print(f"  Cycles reaches {100 * target_error:g} % texel RMS at about {bar['samples']:.0f} samples,"
+                  f" {bar['seconds']:.2f} s (between its {bar['between'][0]} and {bar['between'][1]} sample"
+                  f" rows); half of that, the bar: {bar['seconds'] / 2:.2f} s")
+        for entry in ours:
+            error = error_of(entry["texel_rms"])
+            same = compare.cycles_to_reach(error, rows)
+            entry["cycles_to_same_error" + suffix] = same
+            to_same = ("outside Cycles' rows" if same is None else
+                       f"Cycles needs about {same['samples']:.0f} samples, {same['seconds']:.2f} s:"
+                       f" {same['seconds'] / entry['seconds']:.1f} x the time")
+            against_bar = "" if bar is None else f"; {entry['seconds'] / (bar['seconds'] / 2):.2f} x the bar"
+            print(f"  {entry['label']}: {entry['seconds']:.2f} s for {100 * error:.1f} %; {to_same}{against_bar}")
 
 
 def main() -> int:
@@ -172,10 +185,15 @@ def main() -> int:
                         help="texel RMS for the bar: the seconds Cycles needs to reach it, interpolated between its"
                              " rows, and each run's seconds against half of them (the Cornell box's target)")
     parser.add_argument("--replot", action="store_true", help="only redraw DIR/presets.png from DIR/presets.json")
+    parser.add_argument("--reprint", action="store_true",
+                        help="only print the bar and what Cycles needs for each run from DIR/presets.json")
     args = parser.parse_args()
     out = args.output_dir
     if args.replot:
         plot(out / "presets.png", json.loads((out / "presets.json").read_text()))
+        return 0
+    if args.reprint:
+        print_cycles_equivalents(json.loads((out / "presets.json").read_text()), args.target_error)
         return 0
     out.mkdir(parents=True, exist_ok=True)
     path, is_room = with_lightmap_uvs(args.file, out / args.file.name)
@@ -231,7 +249,7 @@ def main() -> int:
     for samples in args.cycles:
         seconds = times[("cycles", samples)]
         entry = {"label": f"Cycles {samples} samples", "seconds": float(np.median(seconds)), "rounds": seconds,
-                 "method": "cycles"}
+                 "method": "cycles", "samples": samples}
         record["runs"].append(entry)
         rows.append((entry, cycles_images[samples]))
     print(f"reference: Cycles {args.reference} samples x 2 seeds, noise {100 * record['reference']['noise']:.1f} %"
@@ -251,9 +269,7 @@ def main() -> int:
         print(f"| {entry['label']} | {entry['method']} | {entry.get('patches', '')} | {entry['seconds']:.1f} "
               f"| {100 * entry['texel_rms']:.1f} % / {100 * entry['texel_rms_inside']:.1f} % "
               f"| {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) | {worst} {100 * error:+.0f} % |", flush=True)
-    cycles_rows = [(samples, entry["seconds"], entry["texel_rms"])
-                   for samples, (entry, _) in zip(args.cycles, rows[len(rows) - len(args.cycles):])]
-    print_cycles_equivalents(record, cycles_rows, args.target_error)
+    print_cycles_equivalents(record, args.target_error)
     if args.densities:
         record["densities"] = density_sweep(path, json.loads(args.runs[0]), args.cycles[0], args.densities, out)
     (out / "presets.json").write_text(json.dumps(record, indent=1, default=float))

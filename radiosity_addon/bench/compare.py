@@ -185,6 +185,13 @@ def inside_box(positions: np.ndarray, low, high, margin: float = 0.01) -> np.nda
         return np.all((positions >= low) & (positions <= high), axis=-1)
 
 
+def without_reference_noise(error: float, noise: float) -> float:
+    """A texel RMS against a converged reference, estimated from one against a noisy reference: the
+    reference's own relative noise `noise` (`relative_noise`), whose square is its expected share
+    of the squared error, taken out (at least 0 is left)."""
+    return float(np.sqrt(max(error * error - noise * noise, 0.0)))
+
+
 def cycles_to_reach(error: float, rows: list[tuple[int, float, float]]) -> dict | None:
     """What Cycles needs for `error`, from its rows (samples, seconds, error) of one run: the
     samples between the two rows whose errors bracket it, interpolated as a power law (error ∝
