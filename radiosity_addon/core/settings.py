@@ -44,15 +44,19 @@ QUALITY_PRESETS = {
              "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 2, "direct_subsamples": 2}},
     # good's texel pass takes emitters in 2 x 2 pieces: 4 x 4 gave the 4k room 5.13 % where 2 x 2 gives 5.16 %
     # for 8.1 s of lightmaps instead of 4.4 (the Cornell box 2.2 % either way; the penumbrae alike to the eye).
-    # final's probe and texel pass take emitters in 4 x 4 pieces: 8 x 8 gave the same error on
-    # the 4k room (4.6 %) and the Cornell box (2.2 %) for 24 % more time on the room (README)
+    # final's texel pass takes emitters in 4 x 4 pieces: 8 x 8 gave the same error on the 4k room
+    # (4.6 %) and the Cornell box (2.2 %) for 24 % more time on the room (README). Its probe (which
+    # the hemi-cube method's direct light reuses) takes them in 3 x 3 since 2026-12-07: the box's
+    # errors the same to the digit (2.14 %, 4.92 % balanced), the room's 4.56 -> 4.58 % and
+    # 7.84 -> 7.81 %, 18 shots instead of 32 (draft and good keep 4 x 4: 3 x 3 cost the box's
+    # balanced error 0.03 points)
     # final's hemi-cubes are 24 pixels and its sharp texels take 2 x 2 points (32 and 4 x 4 until
     # 2026-12-07): the Cornell box 2.29 -> 2.14 % texel RMS, 4.87 -> 4.91 % balanced, its solve and
     # lightmaps ~0.1 s faster (16 pixels: 2.42 %, 4.98 %); the 4k room (progressive: no hemi-cubes)
     # 4.56 % and 7.84 % balanced either way, its lightmaps 8.5 -> 6.6 s
     "final": {"solve": {"patch_size": 0.5, "elements": 4, "refinements": 5, "visibility_res": 512,
                         "hemicube_res": 24, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0,
-                        "probe_pieces": 4},
+                        "probe_pieces": 3},
               "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
               "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 4, "direct_subsamples": 2}},
 }
