@@ -18,7 +18,7 @@ QUALITIES = ("draft", "good", "final")
 # what each quality sets (the dataclass defaults below are "final"'s but for the hemi-cubes, the
 # finer ones the analytic tests are written for); the bench measures what each
 # costs and reaches (README, "What accuracy costs": on the 4k-triangle room, draft 6.4 % in 14-20 s,
-# good 5.1 % in 15-26 s, final 4.6 % in 141-197 s on the 2-core machine of 2026-12-07; on the Cornell box
+# good 5.1 % in 15-26 s, final 4.6 % in 140-197 s on the 2-core machine of 2026-12-07; on the Cornell box
 # 2.5 / 2.2 / 2.1 % texel RMS, 6.6 / 5.3 / 4.9 % object-balanced, in 0.4 / 0.6 / 0.8 s, medians). The
 # hemi-cubes: 32 pixels (final: 24), one per patch. They carry only the reflected light (the direct light is measured
 # at 4 x 4 points a patch: hemicube/method.py), which is smooth: the emissive-ceiling sample's crate is
