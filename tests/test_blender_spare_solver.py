@@ -23,10 +23,7 @@ def bake_cornell():
 
 
 def ended_within(process, seconds: float) -> bool:
-    deadline = time.monotonic() + seconds
-    while process.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.05)
-    return process.poll() is not None
+    return support.gone_within(lambda: process.poll() is not None, seconds)
 
 
 @pytest.fixture(autouse=True)
