@@ -1,11 +1,16 @@
 #version 430
 #include "bindings"
+#include "opacity"
 flat in uint item;
 in float view_depth;
 uniform float near;
 uniform float far;
 uniform uint back_item;
 out uint out_item;
+#if OPACITY
+in vec2 opacity_uv;
+flat in ivec4 opacity_rect;
+#endif
 
 #if LOOKUP
 flat in uvec4 unit_cuts;   // the unit's record (hemicube_item_buffer.vert): cuts s offset, count, t offset, count;
@@ -61,6 +66,11 @@ vec2 inverse_bilinear(vec2 p, vec2 e, vec2 f, vec2 g) {
 #endif
 
 void main() {
+#if OPACITY
+    if (transparent_at(opacity_uv, opacity_rect)) {
+        discard;
+    }
+#endif
     out_item = item;
 #if LOOKUP
     if (unit_table.y != OWN_TRIANGLES) {

@@ -18,6 +18,11 @@ in uvec4 in_table;      // OWN_TRIANGLES for a patch drawn by its own triangles
 in vec4 in_ef;
 #endif
 
+#if OPACITY
+in vec2 in_opacity_uv;  // texture UVs of an alpha-cut surface (include/opacity.glsl)
+in ivec4 in_opacity_rect;
+#endif
+
 in vec3 in_eye;         // per instance: hemi-cube centre
 in vec3 in_right;       // face axes: right, up, forward (world space)
 in vec3 in_up;
@@ -39,6 +44,10 @@ flat out uvec4 unit_table;
 flat out vec4 unit_ef;
 flat out uint seen_from_front;
 out vec2 surface_st;    // affine over each triangle drawn (parameters, plane coordinates, weights): interpolated exactly
+#endif
+#if OPACITY
+out vec2 opacity_uv;
+flat out ivec4 opacity_rect;
 #endif
 out float view_depth;   // c: distance along the face's axis (linear in the triangle: interpolates exactly)
 out float gl_ClipDistance[5];
@@ -67,6 +76,10 @@ void main() {
     // (a projective depth would clip them apart or lose the far walls' order).
     view_depth = c;
     gl_Position = vec4(x, y, 0.0, c);
+#if OPACITY
+    opacity_uv = in_opacity_uv;
+    opacity_rect = in_opacity_rect;
+#endif
 
     // Item 0 means nothing is seen (sky); a back is its twin patch, or (single-sided) its own item.
     bool front = dot(in_eye - in_position, in_normal) > 0.0;

@@ -17,6 +17,12 @@ layout(triangle_strip, max_vertices = MAX_VERTICES) out;
 in vec3 v_position[];
 flat in uint v_patch[];
 flat in int v_twin[];
+#if OPACITY
+in vec2 v_opacity_uv[];
+flat in ivec4 v_opacity_rect[];
+out vec2 opacity_uv;  // interpolated like the position (include/opacity.glsl)
+flat out ivec4 opacity_rect;
+#endif
 
 uniform vec3 eye;
 uniform vec3 axis_x;
@@ -34,6 +40,12 @@ out float gl_ClipDistance[1];
 vec3 corner(float s, float t) {
     return bilinear_point(v_position[0], v_position[1], v_position[2], v_position[3], s, t);
 }
+
+#if OPACITY
+vec2 opacity_corner(float s, float t) {
+    return mix(mix(v_opacity_uv[0], v_opacity_uv[1], s), mix(v_opacity_uv[3], v_opacity_uv[2], s), t);
+}
+#endif
 
 void emit(vec3 position, uint id) {
     vec3 d = position - eye;
@@ -79,7 +91,15 @@ void main() {
         float t1 = float(j + 1) / float(n);
         for (int i = 0; i <= n; ++i) {
             float s = float(i) / float(n);
+#if OPACITY
+            opacity_rect = v_opacity_rect[0];
+            opacity_uv = opacity_corner(s, t0);
+#endif
             emit(corner(s, t0), id);
+#if OPACITY
+            opacity_rect = v_opacity_rect[0];
+            opacity_uv = opacity_corner(s, t1);
+#endif
             emit(corner(s, t1), id);
         }
         EndPrimitive();

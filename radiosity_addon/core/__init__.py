@@ -95,7 +95,7 @@ from .lightmap import Lightmap, bake_lightmaps, lightmap_sizes
 from .preview import Camera, Preview, render_preview, save_preview
 from .report import Report
 from .scene.geometry import bilinear
-from .scene import (MAX_REFLECTANCE, MaterialMap, Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
+from .scene import (MAX_REFLECTANCE, FaceNames, MaterialMap, OpacityMaps, Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
                     save_scene, scene_from_dict, subdivide)
 from .settings import (CONTENTS, DEFAULT_TOLERANCE, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, PATCH_SIZE, QUALITIES,
                        QUALITY_PRESETS, SHOOTING_POINTS, SOLVE_METHODS, SOLVERS, TEXEL_DENSITY, VISIBILITY_VARIANTS,
@@ -106,7 +106,7 @@ from .timing import StageTimer
 from .uvspace import surfaces_with_material_maps
 
 __all__ = [
-    "CONTENTS", "Camera", "Convergence", "DEFAULT_TOLERANCE", "GLUnavailable", "GPU", "KERNELS", "Lightmap", "LightmapSettings", "MAX_REFLECTANCE", "MaterialMap",
+    "CONTENTS", "Camera", "Convergence", "DEFAULT_TOLERANCE", "FaceNames", "GLUnavailable", "GPU", "KERNELS", "OpacityMaps", "Lightmap", "LightmapSettings", "MAX_REFLECTANCE", "MaterialMap",
     "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "QUALITIES", "QUALITY_PRESETS", "SOLVE_METHODS", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
     "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "StageTimer", "Surface", "TEXEL_DENSITY",
     "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",

@@ -18,6 +18,7 @@ class Counts:
     objects: int
     patches: int
     elements: int
+    clusters: int = 0  # clusters of small faces the solve took as one surface each (scene.face_clusters)
 
 
 @dataclass

@@ -20,7 +20,8 @@ class Solution:
     element_light: np.ndarray | None = None  # (P, S, S, 3)
     patch_direct: np.ndarray | None = None  # (P, 3) the part of H straight from lamps and emitters
     element_direct: np.ndarray | None = None  # (P, S, S, 3)
-    scene: object = None  # the scene as solved (material maps applied), for the lightmaps' direct light
+    scene: object = None  # the scene as solved (material maps applied, small faces clustered), for the lightmaps' direct light
+    clusters: object = None  # FaceClusters: the given scene's faces and the surfaces solved (None: the same)
 
     def npz_arrays(self) -> dict:
         """The `solve --output OUT.npz` arrays (docs/architecture.md, Command line)."""

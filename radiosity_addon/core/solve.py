@@ -18,6 +18,8 @@ from .method_choice import choose_method
 from .progressive import solve_progressive
 from .report import Counts, Report
 from .scene import Scene, check_has_emitter, effects_for, subdivide
+from .scene.analysis import simulated_backs
+from .scene.face_clusters import cluster_faces
 from .settings import SolveSettings
 from .shooting import element_areas, patch_means
 from .solution import Solution
@@ -41,8 +43,13 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
             with timer.stage("materials"):
                 scene = surfaces_with_material_maps(solve_gpu, scene, scene.material_maps)
             check_has_emitter(scene)
+        faces = scene
+        with timer.stage("cluster"):  # small faces into patch-sized clusters: the solve's surfaces
+            clusters = cluster_faces(faces, settings.patch_size, settings.subdiv)
+        scene = clusters.proxies
         with timer.stage("analyse"):
-            effects, backs = effects_for(scene, settings.skip_unneeded)
+            backs = clusters.proxy_backs(simulated_backs(faces, settings.skip_unneeded))
+            effects, backs = effects_for(scene, settings.skip_unneeded, backs)
         with timer.stage("subdivide"):
             patches = subdivide(scene, settings.subdiv, settings.patch_size, backs)
         if scene.material_maps:
@@ -58,27 +65,28 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
             choice = choose_method(patches, settings)
             settings = replace(settings, method=choice.method)
         result = _solve_patches(solve_gpu, scene, patches, settings, effects, timer, progress, should_cancel,
-                                preview, preview_interval, measured)
+                                preview, preview_interval, measured, clusters)
     radiosity, elements, light, element_light, direct, element_direct, details = result
     timer.timings["total"] = time.perf_counter() - started
     element_count = len(patches) * elements.shape[1] ** 2
     report = Report(method=settings.method, settings=settings,
-                    counts=Counts(surfaces=len(scene), objects=len(scene.object_names), patches=len(patches),
-                                  elements=element_count),
+                    counts=Counts(surfaces=len(faces), objects=len(scene.object_names), patches=len(patches),
+                                  elements=element_count, clusters=int(clusters.merged.sum())),
                     timings=timer.timings, effects=effects, details=details,
                     radiosity_max=float(np.max(radiosity)), refined=refined,
                     method_choice=choice.as_dict() if choice is not None else None)
     return Solution(patches=patches, patch_radiosity=np.asarray(radiosity, dtype=np.float64),
                     element_radiosity=elements, report=report, patch_light=np.asarray(light, dtype=np.float64),
                     element_light=element_light, patch_direct=np.asarray(direct, dtype=np.float64),
-                    element_direct=element_direct, scene=scene)
+                    element_direct=element_direct, scene=scene, clusters=clusters)
 
 
 def _solve_patches(gpu: GPU, scene: Scene, patches, settings: SolveSettings, effects, timer: StageTimer, progress,
-                   should_cancel, preview, preview_interval, measured=None):
+                   should_cancel, preview, preview_interval, measured=None, clusters=None):
     """One method's solve on these patches: (B, element B, H, element H, direct H, element direct H,
     details); element arrays (P, S, S, 3), or for the hemi-cube method's one value per patch the
-    patch arrays as 1 x 1 elements. `measured`: refinement's probe of the direct light."""
+    patch arrays as 1 x 1 elements. `measured`: refinement's probe of the direct light; `clusters`:
+    the faces the patches' surfaces stand for (previews are laid out on them)."""
     if settings.method == "hemicube":
         radiosity, elements, element_light, element_direct, details, _ = solve_hemicube(
             gpu, scene, patches, settings, effects, timer, progress, should_cancel, measured)
@@ -88,7 +96,8 @@ def _solve_patches(gpu: GPU, scene: Scene, patches, settings: SolveSettings, eff
     areas = element_areas(patches, settings.elements)
     shown = None if preview is None else (
         lambda radiosity, light: preview(Solution(patches, patch_means(areas, radiosity), radiosity,
-                                                  patch_light=patch_means(areas, light), element_light=light)))
+                                                  patch_light=patch_means(areas, light), element_light=light,
+                                                  scene=scene, clusters=clusters)))
     radiosity, elements, element_light, element_direct, details = solve_progressive(
         gpu, scene, patches, settings, effects, timer, progress, should_cancel, shown, preview_interval)
     return (radiosity, elements, patch_means(areas, element_light), element_light,

@@ -1,7 +1,7 @@
 """What the Blender side and the solver process exchange: a job folder, images as .npz files and
 one JSON object per line on the pipe.
 
-Job folder: scene.json (the scene file format, docs/architecture.md), materials.npz (the textured
+Job folder: scene.npz (the scene file's arrays, `core.save_scene`), materials.npz (the textured
 objects' albedo and emission maps, as Cycles baked them), job.json (settings, the objects that get
 lightmaps, the preview interval); the child adds result.npz and preview-N.npz.
 Messages (child -> parent): {"kind": KIND, ...} with KIND one of
@@ -28,7 +28,7 @@ import numpy as np
 
 from .. import core
 
-SCENE_FILE = "scene.json"
+SCENE_FILE = "scene.npz"
 JOB_FILE = "job.json"
 MATERIALS_FILE = "materials.npz"
 RESULT_FILE = "result.npz"

@@ -144,14 +144,21 @@ bool hemicube_sees(int slot, vec3 q, int plane, vec3 eye, vec3 d) {
 }
 
 // Is the receiver's plane seen at q in the visibility map (hemispherical: (x, y) / |q|;
-// orthographic over the half-width `ortho_extent` > 0)?
-bool map_sees(vec3 q, int plane, float ortho_extent) {
+// orthographic over the half-width `ortho_extent` > 0)? The ray to the receiver runs from `eye`
+// along `d` (a sun's: along its travel, not from its map's origin).
+bool map_sees(vec3 q, int plane, float ortho_extent, vec3 eye, vec3 d) {
     float r = length(q);
     vec2 uv = (ortho_extent > 0.0 ? q.xy / ortho_extent : q.xy / r) * 0.5 + 0.5;
     ivec2 texel = clamp(ivec2(floor(uv * float(item_resolution))), ivec2(0), ivec2(item_resolution - 1));
-    if (on_plane(texelFetch(item_buffer, texel, 0).r, plane)) {
+    uint shown = texelFetch(item_buffer, texel, 0).r;
+    if (on_plane(shown, plane)) {
         return true;
     }
+#if HIDE_BEHIND_OCCLUDERS
+    if (hides(shown, eye, d)) {
+        return false;  // something in front of it: hidden (the search would peek past an occluder's edge)
+    }
+#endif
     // Optionally (OCCLUDER_MARGIN >= 0) the search is for rasterization gaps only, not for
     // peeking past occluders: when the own texel shows something clearly nearer, it is hidden.
     float seen = texelFetch(distance_map, texel, 0).r;
@@ -183,13 +190,16 @@ bool shot_sees(int k, vec3 x, vec3 n, int plane) {
 #if !OCCLUSION
     return true;
 #endif
+    // a sun's rays run along its travel: the ray to x starts its map's depth before x
+    vec3 eye = kind == 2 ? x - q.z * shots[k].normal_w.xyz : shots[k].eye_area.xyz;
+    vec3 ray = x - eye;
 #if VISIBILITY_LOOKUP == 1
-    return hemicube_sees(int(shots[k].extra.y), q, plane, shots[k].eye_area.xyz, d);
+    return hemicube_sees(int(shots[k].extra.y), q, plane, eye, ray);
 #elif VISIBILITY_LOOKUP == 2
-    return map_sees(q, plane, shots[k].extra.z);
+    return map_sees(q, plane, shots[k].extra.z, eye, ray);
 #else
     int slot = int(shots[k].extra.y);
-    return slot >= 0 ? hemicube_sees(slot, q, plane, shots[k].eye_area.xyz, d) : map_sees(q, plane, shots[k].extra.z);
+    return slot >= 0 ? hemicube_sees(slot, q, plane, eye, ray) : map_sees(q, plane, shots[k].extra.z, eye, ray);
 #endif
 }
 

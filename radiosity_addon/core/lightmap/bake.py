@@ -25,6 +25,7 @@ import numpy as np
 from ..errors import SceneError, SolveError
 from ..gpu import GPU, open_gpu
 from ..scene import Scene
+from ..scene.face_clusters import identity_clusters
 from ..settings import LightmapSettings
 from ..solution import Solution
 from ..shooting.sky import element_frames
@@ -35,6 +36,7 @@ from .direct import (direct_light, emitters_reflected_light, emitters_reflection
                      matched_map_resolution, sharp_texels, texel_axes, texel_points)
 from .lattice import continuous_lattice, element_values
 from .mips import filled_image, mip_levels
+from .scattered import element_samples, scattered_values
 from .size import resolve_size
 
 UV_TOLERANCE = 1e-3  # how far given UVs may stray outside [0, 1]
@@ -45,11 +47,13 @@ class Lightmap:
     object_name: str
     levels: list[np.ndarray]  # mip chain down to 1 x 1, (h_k, w_k, 4) float32; levels[0] is the image
     coverage: list[np.ndarray]  # per level, (h_k, w_k) float32: fraction of the texel on charts (alpha adds gutters)
-    patch_index: np.ndarray  # (H, W) int32: patch whose footprint holds the texel centre, -1 if none
+    patch_index: np.ndarray  # (H, W) int32: patch whose footprint holds the texel centre (on a clustered face: the
+    # patch nearest it), -1 if none
     surfaces: np.ndarray  # (n,) indices of the object's surfaces
     surface_uv: np.ndarray  # (n, 4, 2) corner UVs the map was baked with (triangles repeat c2)
     texel_density: float  # achieved texels per scene unit: sqrt(texels inside faces / face area)
     content: str = "light"  # "light": H (shown as E + ρ H), "combined": B
+    face_index: np.ndarray | None = None  # (H, W) int32: the face whose footprint holds the texel centre, -1 if none
 
     @property
     def rgba(self) -> np.ndarray:
@@ -143,6 +147,30 @@ def lightmap_sizes(scene: Scene, settings: LightmapSettings | None = None, objec
     return plan_layouts(scene, settings or LightmapSettings(), objects).sizes
 
 
+@dataclass
+class ObjectTexels:
+    """One lightmap's texels as laid out: what each covered texel shows and the light it holds.
+    Its units are what was rasterized: the patches of its faces the solve kept as they are, then
+    its faces the solve took in clusters (`scene.face_clusters`)."""
+    values: np.ndarray  # (H, W, 3) float64: the light laid out, then added to
+    signed_ids: np.ndarray  # (H, W) int32: unit + 1 where a texel's centre lies in it, -(unit + 1) where it only grazes it
+    unit_face: np.ndarray  # (U,) the face of each unit
+    unit_patch: np.ndarray  # (U,) the patch a unit is, -1 for a face of a cluster
+    positions: np.ndarray  # (H, W, 3) the world point each texel shows
+    unit_of_texel: np.ndarray  # (H, W) its unit, -1 where none covers it
+    covered: np.ndarray  # (H, W) bool
+    axes: np.ndarray  # (U, 3, 2) each unit's world step per texel along x and y
+    nearest_patch: np.ndarray | None = None  # (H, W) on clustered faces the patch whose elements weigh most
+
+    def texel_faces(self) -> np.ndarray:
+        """(covered texels,) the face each covered texel shows."""
+        return self.unit_face[self.unit_of_texel[self.covered]]
+
+    def texel_patches(self) -> np.ndarray:
+        """(covered texels,) the patch each covered texel shows, -1 on clustered faces."""
+        return self.unit_patch[self.unit_of_texel[self.covered]]
+
+
 def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings | None = None,
                    gpu: GPU | None = None, objects=None) -> dict[str, Lightmap]:
     """One `Lightmap` per object of `scene` (or of `objects`, names of some of them: objects
@@ -150,6 +178,8 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     settings = settings or LightmapSettings()
     layouts = plan_layouts(scene, settings, objects)
     objects, object_of_surface, surface_uv = layouts.objects, layouts.object_of_surface, layouts.surface_uv
+    clusters = solution.clusters if solution.clusters is not None else identity_clusters(scene)
+    faces = clusters.faces if len(clusters.faces) == len(scene) else scene
     # the direct light's maps resolve no finer than the finest texel (an object's area over its
     # lightmap's texels: an upper bound on its texels' density, so the maps err on the fine side)
     finest_texel = min((math.sqrt(scene.area[indices].sum() / math.prod(layouts.sizes[name]))
@@ -157,10 +187,12 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     settings = replace(settings, direct_map_resolution=matched_map_resolution(
         scene.diameter, finest_texel, settings.direct_map_resolution))
     patches = solution.patches
+    solved = clusters.proxies
     light = settings.content == "light"
     report = solution.report
     per_texel = settings.direct_per_texel and solution.patch_direct is not None and report is not None
-    mapped = np.isin(patches.surface, [i for name in scene.material_maps for i in scene.object_surfaces.get(name, ())])
+    mapped_objects = [solved.object_names.index(name) for name in scene.material_maps if name in solved.object_names]
+    mapped = np.isin(solved.object_index[patches.surface], mapped_objects)
     # what is interpolated: the light H (less its direct part when texels get that), or B for
     # "combined" where no material map turns H into B texel by texel
     reflected = None
@@ -179,78 +211,119 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
         raise SolveError("the solution does not belong to this scene (patch counts differ)")
     scene_size = max(scene.diameter, 1e-30)
 
+    # the faces the solve kept as they are: their patches are laid out by their lattices
+    face_of_patch = clusters.face_of_proxy[patches.surface]
+    kept = face_of_patch >= 0
     # patch corner UVs: the given ones were subdivided with the patches; automatic ones are affine in position
     patch_uv = np.array(patches.uv, dtype=np.float64)
-    auto = layouts.laid_out[patches.surface]
-    maps = layouts.uv_maps[patches.surface[auto]]
+    auto = kept & layouts.laid_out[np.maximum(face_of_patch, 0)]
+    maps = layouts.uv_maps[face_of_patch[auto]]
     patch_uv[auto] = np.einsum("pij,pkj->pki", maps[..., :3], patches.corners[auto]) + maps[:, None, :, 3]
 
-    group = np.where(patches.is_back, -1, object_of_surface[patches.surface])  # a lightmap holds the front
+    group = np.where(patches.is_back | ~kept, -1, object_of_surface[np.maximum(face_of_patch, 0)])  # fronts only
     baked = np.flatnonzero(group >= 0)
     lattice = np.zeros((len(patches),) + (values.shape[1] + 2,) * 2 + (3,))
-    lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
-                                        patches.normal[baked], world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
-    rasters = {}
-    axes = np.zeros((len(patches), 3, 2))  # each patch's world step per texel, in its object's lightmap
+    if len(baked):
+        lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
+                                            patches.normal[baked], world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
+    clustered = clusters.merged[clusters.proxy_of_face]  # (F,) faces solved in a cluster
+    sample_object = solved.object_index[patches.surface]
+    texels = {}
     with open_gpu(gpu) as lightmap_gpu:
-        for name, indices in objects.items():
+        for number, (name, indices) in enumerate(objects.items()):
             size = layouts.sizes[name]
-            mine = np.flatnonzero(np.isin(patches.surface, indices) & ~patches.is_back)
-            corners_texels = patch_uv[mine] * np.asarray(size, dtype=np.float64)
-            texel_values, signed_ids = rasterize(lightmap_gpu, corners_texels, lattice[mine], size)
+            mine = np.flatnonzero(group == number)
+            loose = indices[clustered[indices]]
+            unit_patch = np.concatenate([mine, np.full(len(loose), -1, dtype=np.int64)])
+            unit_face = np.concatenate([face_of_patch[mine], loose])
+            unit_corners = np.concatenate([patches.corners[mine], scene.corners[loose]])
+            corners_texels = np.concatenate([patch_uv[mine], surface_uv[loose]]) * np.asarray(size, dtype=np.float64)
+            unit_lattice = np.concatenate([lattice[mine], np.zeros((len(loose),) + lattice.shape[1:])])
+            texel_values, signed_ids = rasterize(lightmap_gpu, corners_texels, unit_lattice, size)
             if not (signed_ids != 0).any():
                 raise SolveError(f"object '{name}': its faces cover no texel of a {size[0]}x{size[1]}"
                                  " lightmap; raise the texel density or its resolution")
-            points = texel_points(lightmap_gpu, patches, mine, corners_texels, size)
-            axes[mine] = texel_axes(patches, mine, corners_texels)
-            rasters[name] = (texel_values.astype(np.float64), signed_ids, mine, points)
+            positions, unit_of_texel, covered = texel_points(lightmap_gpu, unit_corners, corners_texels, size)
+            entry = ObjectTexels(values=texel_values.astype(np.float64), signed_ids=signed_ids, unit_face=unit_face,
+                                 unit_patch=unit_patch, positions=positions, unit_of_texel=unit_of_texel, covered=covered,
+                                 axes=texel_axes(unit_corners, corners_texels))
+            if len(loose):  # texels of clustered faces: the elements' values around them
+                on_loose = covered & (unit_patch[np.maximum(unit_of_texel, 0)] < 0)
+                object_index = solved.object_names.index(name)
+                rows = np.flatnonzero((sample_object == object_index) & ~patches.is_back)
+                found, nearest = scattered_values(positions[on_loose], faces.normal[unit_face[unit_of_texel[on_loose]]],
+                                                  element_samples(patches, values, rows))
+                entry.values[on_loose] = found
+                entry.nearest_patch = np.full(unit_of_texel.shape, -1, dtype=np.int64)
+                entry.nearest_patch[on_loose] = nearest
+            texels[name] = entry
         if per_texel:
-            add_direct_light(lightmap_gpu, solution, rasters, settings, axes, reflected)
-        clear_contacts(scene, patches, rasters, holds_b=~mapped if not (per_texel or light) else None)
+            add_direct_light(lightmap_gpu, solution, clusters, faces, texels, settings, reflected)
+        clear_contacts(faces, texels, holds_b=_holds_b(mapped, faces, scene) if not (per_texel or light) else None)
     lightmaps = {}
-    for name, (texel_values, signed_ids, mine, points) in rasters.items():
+    for name, entry in texels.items():
         size, indices = layouts.sizes[name], objects[name]
+        texel_values = entry.values
         material = scene.material_maps.get(name)
         if not light and material is not None:
             texel_values = combined_texels(texel_values, material, size, name)
-        elif not light and per_texel:  # B = E + ρ H with each texel's patch values
-            owner = np.maximum(points[1], 0)
-            texel_values = patches.emission[owner] + patches.reflectance[owner] * texel_values
-        covered = signed_ids != 0
-        inside = signed_ids > 0
-        patch_index = np.where(inside, mine[np.maximum(signed_ids, 1) - 1], -1).astype(np.int32)
-        levels, coverage = mip_levels(texel_values, covered, settings.gutter)
-        lightmaps[name] = Lightmap(object_name=name, levels=levels, coverage=coverage, patch_index=patch_index,
+        elif not light and per_texel:  # B = E + ρ H with each texel's patch values (a clustered face's own)
+            texel_values = texel_values.copy()
+            patch, face = entry.texel_patches(), entry.texel_faces()
+            on_patch = patch >= 0
+            emission = np.where(on_patch[:, None], patches.emission[np.maximum(patch, 0)], faces.emission[face])
+            reflectance = np.where(on_patch[:, None], patches.reflectance[np.maximum(patch, 0)], faces.reflectance[face])
+            texel_values[entry.covered] = emission + reflectance * texel_values[entry.covered]
+        inside = entry.signed_ids > 0
+        unit = np.maximum(entry.signed_ids, 1) - 1
+        patch_index = np.where(inside, entry.unit_patch[unit], -1)
+        if entry.nearest_patch is not None:
+            patch_index = np.where(inside & (patch_index < 0), entry.nearest_patch, patch_index)
+        levels, coverage = mip_levels(texel_values, entry.signed_ids != 0, settings.gutter)
+        lightmaps[name] = Lightmap(object_name=name, levels=levels, coverage=coverage,
+                                   patch_index=patch_index.astype(np.int32),
                                    surfaces=indices, surface_uv=surface_uv[indices],
                                    texel_density=math.sqrt(inside.sum() / scene.area[indices].sum()),
-                                   content=settings.content)
+                                   content=settings.content,
+                                   face_index=np.where(inside, entry.unit_face[unit], -1).astype(np.int32))
     return lightmaps
 
 
-def covered_texels(rasters: dict) -> tuple[np.ndarray, np.ndarray, list[int]]:
-    """The texels every lightmap of `rasters` covers, in one list: their points (N, 3), owner
-    patches (N,), and how many belong to each lightmap, in order."""
-    covered = [entry[3][2] for entry in rasters.values()]
-    points = np.concatenate([entry[3][0][mask] for entry, mask in zip(rasters.values(), covered)])
-    owners = np.concatenate([entry[3][1][mask] for entry, mask in zip(rasters.values(), covered)])
-    return points, owners, [int(mask.sum()) for mask in covered]
+def _holds_b(mapped: np.ndarray, faces: Scene, scene: Scene):
+    """Per patch whether its texels hold the interpolated B (no material map makes B from H), and
+    per face the same for clustered faces' texels."""
+    mapped_faces = np.isin(np.asarray(faces.object_names)[faces.object_index], list(scene.material_maps))
+    return ~mapped, ~mapped_faces
 
 
-def clear_contacts(scene: Scene, patches, rasters: dict, holds_b: np.ndarray | None) -> None:
+def covered_texels(texels: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[int]]:
+    """The texels every lightmap of `texels` covers, in one list: their points (N, 3), faces (N,),
+    patches (N,; -1 on clustered faces), and how many belong to each lightmap, in order."""
+    entries = list(texels.values())
+    points = np.concatenate([entry.positions[entry.covered] for entry in entries])
+    faces = np.concatenate([entry.texel_faces() for entry in entries])
+    patches = np.concatenate([entry.texel_patches() for entry in entries])
+    return points, faces, patches, [int(entry.covered.sum()) for entry in entries]
+
+
+def clear_contacts(faces: Scene, texels: dict, holds_b) -> None:
     """Texels under a face touching theirs see nothing (`contact`): their light H becomes 0, and
-    B = E where a texel holds the interpolated B (`holds_b` per patch; None: nowhere)."""
-    points, owners, counts = covered_texels(rasters)
-    touched = in_contact(scene, points, patches.surface[owners])
-    cleared = np.zeros((len(owners), 3))
+    B = E where a texel holds the interpolated B (`holds_b`: per patch and per face; None: nowhere)."""
+    points, face, patch, counts = covered_texels(texels)
+    touched = in_contact(faces, points, face)
+    cleared = np.zeros((len(face), 3))
     if holds_b is not None:
-        cleared = np.where(holds_b[owners][:, None], patches.emission[owners], 0.0)
+        by_patch, by_face = holds_b
+        on_patch = patch >= 0
+        holds = np.where(on_patch, by_patch[np.maximum(patch, 0)], by_face[face])
+        cleared = np.where(holds[:, None], faces.emission[face], 0.0)
     start = 0
-    for (texel_values, _, _, (_, _, covered)), count in zip(rasters.values(), counts):
+    for entry, count in zip(texels.values(), counts):
         mine = slice(start, start + count)
         start += count
-        values = texel_values[covered]
+        values = entry.values[entry.covered]
         values[touched[mine]] = cleared[mine][touched[mine]]
-        texel_values[covered] = values
+        entry.values[entry.covered] = values
 
 
 def reflected_light_at_elements(gpu: GPU | None, solution: Solution, settings: LightmapSettings,
@@ -261,44 +334,53 @@ def reflected_light_at_elements(gpu: GPU | None, solution: Solution, settings: L
     points = element_frames(patches, elements)[0]
     owners = np.repeat(np.arange(len(patches)), elements * elements)
     with open_gpu(gpu) as own_gpu:
-        light = emitters_reflected_light(own_gpu, solution.scene, patches, points, owners, reflected,
-                                         report.settings.visibility, settings.direct_map_resolution,
-                                         report.effects.occlusion, settings.direct_pieces)
+        light = emitters_reflected_light(own_gpu, solution.scene, patches, points, patches.normal[owners],
+                                         patches.plane[owners], reflected, report.settings.visibility,
+                                         settings.direct_map_resolution, report.effects.occlusion,
+                                         settings.direct_pieces)
     return light.reshape(len(patches), elements, elements, 3)
 
 
-def add_direct_light(gpu: GPU, solution: Solution, rasters: dict, settings: LightmapSettings,
-                     axes: np.ndarray, reflected: np.ndarray | None = None) -> None:
+def add_direct_light(gpu: GPU, solution: Solution, clusters, faces: Scene, texels: dict, settings: LightmapSettings,
+                     reflected: np.ndarray | None = None) -> None:
     """Add every lightmap's direct light texel by texel (one pass over all texels per shot), the
-    mean over the texel's square where it is sharp (a second pass over those texels' points;
-    `axes` (P, 3, 2): each patch's world step per texel); the emitters send what they reflect of
-    `reflected` (P, 3) too, when given."""
-    points, owners, counts = covered_texels(rasters)
+    mean over the texel's square where it is sharp (a second pass over those texels' points; each
+    unit's world step per texel is its `axes`); the emitters send what they reflect of `reflected`
+    (P, 3) too, when given."""
+    points, face, patch, counts = covered_texels(texels)
+    patches = solution.patches
+    on_patch = patch >= 0
+    normals = np.where(on_patch[:, None], patches.normal[np.maximum(patch, 0)], faces.normal[face])
+    # a texel is looked up as a point of its solved surface's front (its patch's plane, or its cluster's)
+    planes = np.where(on_patch, patches.plane[np.maximum(patch, 0)], clusters.proxy_of_face[face])
     report = solution.report
-    shoot = lambda at, on: direct_light(  # noqa: E731
-        gpu, solution.scene, solution.patches, at, on, report.settings.visibility, settings.direct_map_resolution,
-        report.effects.occlusion, settings.direct_pieces, reflected)[0]
-    light = shoot(points, owners)
-    masks = [entry[3][2] for entry in rasters.values()]
-    images, faces, start = [], [], 0
-    for mask, count in zip(masks, counts):
-        image, face = np.zeros(mask.shape), np.full(mask.shape, -1, dtype=np.int64)
-        image[mask] = light[start:start + count].sum(axis=1)
-        face[mask] = solution.patches.surface[owners[start:start + count]]
+    shoot = lambda at, normal, plane: direct_light(  # noqa: E731
+        gpu, solution.scene, patches, at, normal, plane, report.settings.visibility, settings.direct_map_resolution,
+        report.effects.occlusion, settings.direct_pieces, reflected, clusters)[0]
+    light = shoot(points, normals, planes)
+    # where light may bend smoothly: a face the solve kept, or a cluster's faces together
+    surface = clusters.proxy_of_face[face]
+    images, face_images, start = [], [], 0
+    for entry, count in zip(texels.values(), counts):
+        image, face_image = np.zeros(entry.covered.shape), np.full(entry.covered.shape, -1, dtype=np.int64)
+        image[entry.covered] = light[start:start + count].sum(axis=1)
+        face_image[entry.covered] = surface[start:start + count]
         images.append(image)
-        faces.append(face)
+        face_images.append(face_image)
         start += count
-    sharp = np.flatnonzero(np.concatenate([flags[mask] for flags, mask in zip(sharp_texels(images, faces), masks)]))
+    sharp = np.flatnonzero(np.concatenate([flags[entry.covered] for flags, entry
+                                           in zip(sharp_texels(images, face_images), texels.values())]))
     if len(sharp) and settings.direct_subsamples > 1:
-        at, texel = footprint_points(solution.scene, solution.patches, points[sharp], owners[sharp],
-                                     axes[owners[sharp]], settings.direct_subsamples)
-        spread = shoot(at, owners[sharp][texel])
+        axes = np.concatenate([entry.axes[entry.unit_of_texel[entry.covered]] for entry in texels.values()])
+        at, texel = footprint_points(faces.corners[face[sharp]], normals[sharp], points[sharp], axes[sharp],
+                                     settings.direct_subsamples, clip=on_patch[sharp])
+        spread = shoot(at, normals[sharp][texel], planes[sharp][texel])
         taken = np.bincount(texel, minlength=len(sharp))
         light[sharp] = np.stack([np.bincount(texel, weights=spread[:, c], minlength=len(sharp))
                                  for c in range(3)], axis=1) / taken[:, None]
     start = 0
-    for (texel_values, _, _, (_, _, covered)), count in zip(rasters.values(), counts):
-        texel_values[covered] = np.maximum(texel_values[covered] + light[start:start + count], 0.0)
+    for entry, count in zip(texels.values(), counts):
+        entry.values[entry.covered] = np.maximum(entry.values[entry.covered] + light[start:start + count], 0.0)
         start += count
 
 

@@ -24,7 +24,7 @@ from ..gpu import GPU
 from ..scene import Patches, Scene
 from ..scene.geometry import bilinear
 from ..settings import VISIBILITY_VARIANTS
-from ..shooting import direct_shooters, emitter_shooters, light_at_points
+from ..shooting import direct_shooters, emitter_shooters, light_at_receivers
 from ..uvspace import rasterize
 
 REFLECTION_FLOOR = 1e-4  # emitters reflecting less than this share of the brightest emission are not shot again
@@ -44,25 +44,26 @@ def matched_map_resolution(diameter: float, finest_texel: float, cap: int) -> in
     return int(min(cap, max(MIN_MAP_RESOLUTION, stepped)))
 
 
-def texel_points(gpu: GPU, patches: Patches, rows: np.ndarray, corners_texels: np.ndarray, size) -> tuple:
-    """(positions (H, W, 3), owner patch (H, W), covered (H, W)) of one lightmap whose patches are
-    `rows` with UV corners in texels `corners_texels`."""
+def texel_points(gpu: GPU, corners: np.ndarray, corners_texels: np.ndarray, size) -> tuple:
+    """(positions (H, W, 3), owner (H, W): the index into `corners` of the quad (n, 4, 3) holding
+    the texel, -1 for none, covered (H, W)) of one lightmap whose quads have UV corners in texels
+    `corners_texels` (n, 4, 2)."""
     params = np.array([0.0, 0.5, 1.0])
     s, t = np.meshgrid(params, params)
-    lattice = bilinear(patches.corners[rows], s, t)  # (n, 3, 3, 3): the bilinear map is exact on it
+    lattice = bilinear(corners, s, t)  # (n, 3, 3, 3): the bilinear map is exact on it
     positions, signed_ids = rasterize(gpu, corners_texels, lattice, size)
     covered = signed_ids != 0
-    owner = np.where(covered, rows[np.abs(signed_ids) - 1], -1)
+    owner = np.where(covered, np.abs(signed_ids) - 1, -1)
     return positions.astype(np.float64), owner, covered
 
 
 SHARP_CONTRAST = 0.12  # second difference over the brightest of three texels above which the middle one is sharp
 
 
-def texel_axes(patches: Patches, rows: np.ndarray, corners_texels: np.ndarray) -> np.ndarray:
-    """(n, 3, 2): the world step of one texel along x and along y on each patch of `rows`, from
-    its first three corners (its UV map is affine on them); zeros where the UVs are degenerate."""
-    world = patches.corners[rows]
+def texel_axes(corners: np.ndarray, corners_texels: np.ndarray) -> np.ndarray:
+    """(n, 3, 2): the world step of one texel along x and along y on each quad (n, 4, 3), from its
+    first three corners (its UV map is affine on them); zeros where the UVs are degenerate."""
+    world = corners
     uv = np.asarray(corners_texels, dtype=np.float64)
     edges_uv = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], axis=2)  # (n, 2, 2): columns
     edges_world = np.stack([world[:, 1] - world[:, 0], world[:, 2] - world[:, 0]], axis=2)  # (n, 3, 2)
@@ -94,23 +95,26 @@ def sharp_texels(images: list[np.ndarray], faces: list[np.ndarray]) -> list[np.n
     return result
 
 
-def footprint_points(scene: Scene, patches: Patches, centres: np.ndarray, owners: np.ndarray,
-                     axes: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+def footprint_points(corners: np.ndarray, normals: np.ndarray, centres: np.ndarray, axes: np.ndarray,
+                     count: int, clip: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(points (M, 3), index of their texel (M,)): `count` x `count` points spread evenly over each
-    texel's square (its centre `centres` (N, 3), its patch's texel `axes` (N, 3, 2)) and inside
-    the face its patch `owners` (N,) lies on; a texel none of whose points is inside keeps its
-    centre."""
+    texel's square (its centre `centres` (N, 3), its texel `axes` (N, 3, 2)) and inside the face
+    `corners` (N, 4, 3; triangles repeat their last corner) with `normals` (N, 3) it lies on, where
+    `clip` (N,; None: everywhere) says so (a face smaller than a texel, among the faces of a
+    cluster, leaves its square to its neighbours); a texel none of whose points is inside keeps
+    its centre."""
     offsets = (np.arange(count) + 0.5) / count - 0.5
     dx, dy = (grid.ravel() for grid in np.meshgrid(offsets, offsets))
     # the face's edges as inward half-planes, tested in texel steps: side(centre + a x + b y) =
     # side(centre) + a side(x) + b side(y), per texel (N, 4) instead of per point
-    corners = scene.corners[patches.surface[owners]]  # (N, 4, 3), triangles repeat their last corner
-    inward = np.cross(patches.normal[owners][:, None, :], np.roll(corners, -1, axis=1) - corners)  # (N, 4, 3)
+    inward = np.cross(normals[:, None, :], np.roll(corners, -1, axis=1) - corners)  # (N, 4, 3)
     reach = np.linalg.norm(inward, axis=2)
     at_centre = np.einsum("nkj,nkj->nk", inward, centres[:, None, :] - corners) + 1e-9 * reach * (reach + 1.0)
     along = np.einsum("nkj,njc->nkc", inward, axes)  # (N, 4, 2)
     side = at_centre[:, None, :] + along[:, None, :, 0] * dx[None, :, None] + along[:, None, :, 1] * dy[None, :, None]
     inside = np.all(side >= 0.0, axis=2)  # (N, count²)
+    if clip is not None:
+        inside |= ~clip[:, None]
     texel, sample = np.nonzero(inside)
     points = centres[texel] + axes[texel, :, 0] * dx[sample, None] + axes[texel, :, 1] * dy[sample, None]
     lone = np.flatnonzero(~inside.any(axis=1))  # slivers thinner than the points' spacing
@@ -128,31 +132,37 @@ def emitters_reflection(patches: Patches, radiosity: np.ndarray) -> np.ndarray |
     return reflected if reflected.max() > REFLECTION_FLOOR * patches.emission.max() else None
 
 
-def emitters_reflected_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray,
-                             reflected: np.ndarray, visibility: str, resolution: int, occlusion: bool,
-                             pieces: int) -> np.ndarray:
-    """(N, 3) the light at `points` (on the patches `owners`) from what the emitters reflect,
-    `reflected` (P, 3), shot from their pieces as `direct_light` shoots it: the part of the
-    solve's element light that the texels take from `direct_light(..., reflected)` instead."""
+def emitters_reflected_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, normals: np.ndarray,
+                             planes: np.ndarray, reflected: np.ndarray, visibility: str, resolution: int,
+                             occlusion: bool, pieces: int) -> np.ndarray:
+    """(N, 3) the light at `points` (with `normals`, on the `planes` of the solved surfaces' sides)
+    from what the emitters reflect, `reflected` (P, 3), shot from their pieces as `direct_light`
+    shoots it: the part of the solve's element light that the texels take from
+    `direct_light(..., reflected)` instead."""
     shooters = emitter_shooters(scene, patches, pieces, reflected, emission=False)
-    return shot_light(gpu, scene, patches, points, owners, shooters, visibility, resolution, occlusion)
+    return shot_light(gpu, scene, patches, points, normals, planes, shooters, visibility, resolution, occlusion)
 
 
-def shot_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray, shooters: list,
-               visibility: str, resolution: int, occlusion: bool) -> np.ndarray:
-    """(N, 3) the light `shooters` send to `points` (the texel pass, `light_at_points`), in the
-    solve's visibility variant where the texel pass has it."""
+def shot_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, normals: np.ndarray, planes: np.ndarray,
+               shooters: list, visibility: str, resolution: int, occlusion: bool, clusters=None) -> np.ndarray:
+    """(N, 3) the light `shooters` send to `points` (the texel pass, `light_at_receivers`; with
+    `clusters` the clusters' own faces occlude), in the solve's visibility variant where the texel
+    pass has it."""
     variant = visibility if visibility in VISIBILITY_VARIANTS else "hemicube"
     with gpu.resources() as res:
-        return light_at_points(res, scene, patches, points, owners, shooters, variant, resolution, occlusion)
+        return light_at_receivers(res, scene, patches, points, normals, planes, shooters, variant, resolution,
+                                  occlusion, clusters=clusters)
 
 
-def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, owners: np.ndarray,
-                 visibility: str, resolution: int, occlusion: bool, pieces: int,
-                 reflected: np.ndarray | None = None) -> tuple[np.ndarray, int]:
-    """(N, 3) direct light H at `points` (N, 3) lying on the patches `owners` (N,), and the
-    number of shots (emitters and area lamps in up to `pieces` x `pieces` each; the emitters
-    send what they reflect of `reflected` (P, 3) too, when given)."""
+def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, normals: np.ndarray,
+                 planes: np.ndarray, visibility: str, resolution: int, occlusion: bool, pieces: int,
+                 reflected: np.ndarray | None = None, clusters=None) -> tuple[np.ndarray, int]:
+    """(N, 3) direct light H at `points` (N, 3) with `normals` (N, 3), looked up as points of the
+    solved surfaces' sides `planes` (N,) (`Patches.plane`), and the number of shots (emitters and
+    area lamps in up to `pieces` x `pieces` each; the emitters send what they reflect of
+    `reflected` (P, 3) too, when given). With `clusters` the clusters' faces occlude in place of
+    their rectangles (`shooting.surface_visibility`)."""
     shooters = direct_shooters(scene, patches, pieces, reflected)
-    light = shot_light(gpu, scene, patches, points, owners, shooters, visibility, resolution, occlusion)
+    light = shot_light(gpu, scene, patches, points, normals, planes, shooters, visibility, resolution, occlusion,
+                       clusters)
     return light, len(shooters)

@@ -202,7 +202,8 @@ def with_backs(scene: Scene, backs: np.ndarray) -> Scene:
                  corner_count=scene.corner_count[index], reflectance=scene.reflectance[index],
                  emission=scene.emission[index], object_index=scene.object_index[index],
                  object_names=scene.object_names, uv=scene.uv[index], has_uv=scene.has_uv[index],
-                 two_sided=np.zeros(len(index), dtype=bool), extras=scene.extras)
+                 two_sided=np.zeros(len(index), dtype=bool), extras=scene.extras,
+                 opacity=None if scene.opacity is None else scene.opacity.rows(index))
 
 
 def analyse(scene: Scene, backs: np.ndarray | None = None) -> SceneEffects:
@@ -218,10 +219,10 @@ def analyse(scene: Scene, backs: np.ndarray | None = None) -> SceneEffects:
     )
 
 
-def effects_for(scene: Scene, skip_unneeded: bool) -> tuple[SceneEffects, np.ndarray]:
+def effects_for(scene: Scene, skip_unneeded: bool, backs: np.ndarray | None = None) -> tuple[SceneEffects, np.ndarray]:
     """What to simulate — the analysis, or everything when skips are disabled — and the mask of
-    surfaces whose back is simulated."""
-    backs = simulated_backs(scene, skip_unneeded)
+    surfaces whose back is simulated (`backs` when given: decided on the faces the surfaces stand for)."""
+    backs = simulated_backs(scene, skip_unneeded) if backs is None else backs
     if not skip_unneeded:
         return SceneEffects.everything(emitter_count(scene), int(backs.sum())), backs
     return analyse(scene, backs), backs

@@ -10,6 +10,7 @@ docs/architecture.md, Units).
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -60,9 +61,28 @@ def padded_corners(vertices) -> np.ndarray:
     return np.concatenate([v, v[-1:]])[:4] if len(v) == 3 else v
 
 
+class FaceNames(Sequence):
+    """Surface names made on demand, `<object>#<k>` (k counting the scene's surfaces): a mesh
+    exported face by face needs no string per face until one is named in a message."""
+
+    def __init__(self, object_names: list[str], object_index: np.ndarray):
+        self.object_names, self.object_index = object_names, object_index
+
+    def __len__(self) -> int:
+        return len(self.object_index)
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        index = int(index)
+        if index < 0:
+            index += len(self)
+        return f"{self.object_names[self.object_index[index]]}#{index}"
+
+
 @dataclass(eq=False)
 class Scene:
-    names: list[str]  # (S) surface names, unique
+    names: Sequence[str]  # (S) surface names, unique (a list, or FaceNames)
     corners: np.ndarray  # (S, 4, 3) float64, counter-clockwise from the front; triangles repeat c2
     corner_count: np.ndarray  # (S,) int: 3 or 4
     reflectance: np.ndarray  # (S, 3)
@@ -74,6 +94,7 @@ class Scene:
     two_sided: np.ndarray  # (S,) bool: the back emits and receives too
     extras: dict = field(default_factory=dict)  # other top-level keys (lights, world, camera), kept on save
     material_maps: dict = field(default_factory=dict)  # object name -> MaterialMap (textured materials)
+    opacity: object = None  # OpacityMaps: faces whose material lets light through where its texture says (None: none)
 
     @classmethod
     def from_surfaces(cls, surfaces: list[Surface], extras: dict | None = None) -> "Scene":
@@ -106,6 +127,11 @@ class Scene:
     def surfaces(self) -> list[Surface]:
         """Every surface as a `Surface` (a Python object each: for callers that handle few)."""
         return [self.surface(i) for i in range(len(self))]
+
+    @property
+    def opacity_index(self) -> np.ndarray | None:
+        """(S,) the opacity texture of each surface, -1 for opaque ones (None: the scene has none)."""
+        return None if self.opacity is None else self.opacity.index
 
     @property
     def objects(self) -> list[str]:

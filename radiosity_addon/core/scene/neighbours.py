@@ -25,9 +25,11 @@ def _size_classes(sizes: np.ndarray) -> np.ndarray:
     return np.floor(np.log(np.maximum(sizes, 1e-12)) / np.log(CLASS_RATIO)).astype(np.int64)
 
 
-def near_pairs(centre: np.ndarray, radius: np.ndarray, queries: np.ndarray, reach: np.ndarray):
+def near_pairs(centre: np.ndarray, radius: np.ndarray, queries: np.ndarray, reach: np.ndarray,
+               others: np.ndarray | None = None):
     """Yield chunks (query positions into `queries`, other indices) of every pair whose centres are
-    closer than reach[query] + radius[other]; the query itself is included. The grids' many small
+    closer than reach[query] + radius[other]; the query itself is included. `others` (indices into
+    `centre`; None: all) are the things a query may meet. The grids' many small
     chunks (per pair of size classes and step of offsets: some 30 a search on the Cornell box) are
     joined into chunks of about PAIR_CHUNK pairs, so a caller's numpy runs once a chunk, not once
     a grid step (the refinement's facing partners: 73 -> 64 ms a Cornell final solve)."""
@@ -35,13 +37,16 @@ def near_pairs(centre: np.ndarray, radius: np.ndarray, queries: np.ndarray, reac
     queries = np.asarray(queries)
     if len(queries) == 0 or len(centre) == 0:
         return
-    query_class, other_class = _size_classes(reach), _size_classes(radius)
+    candidates = np.arange(len(centre)) if others is None else np.asarray(others)
+    if len(candidates) == 0:
+        return
+    query_class, other_class = _size_classes(reach), _size_classes(radius[candidates])
     held, count = [], 0
     for q_level in np.unique(query_class):
         in_queries = np.flatnonzero(query_class == q_level)
         for o_level in np.unique(other_class):
-            others = np.flatnonzero(other_class == o_level)
-            for chunk in _grid_pairs(centre, radius, queries, reach, in_queries, others):
+            in_class = candidates[other_class == o_level]
+            for chunk in _grid_pairs(centre, radius, queries, reach, in_queries, in_class):
                 held.append(chunk)
                 count += len(chunk[0])
                 if count >= PAIR_CHUNK:

@@ -23,6 +23,7 @@ import numpy as np
 from ..settings import MAX_SPLIT
 from .geometry import area_centroid, area_vector, bilinear, bilinear_each, reversed_corners
 from .model import Scene
+from .opacity import OpacityMaps, coverage
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
@@ -49,6 +50,9 @@ class Patches:
     # Item buffers draw a surface once and find the patch under each pixel from them (visibility.item_geometry).
     params: np.ndarray | None = None
     surface_corners: np.ndarray | None = None
+    # the opacity textures of patches on alpha-cut surfaces (scene.opacity): per patch its texture and its
+    # corners' texture UVs, subdivided like `uv`; None when the scene has none
+    opacity: OpacityMaps | None = None
 
     def __post_init__(self):
         if self.back_of is None:
@@ -99,6 +103,13 @@ class Patches:
     def center(self) -> np.ndarray:
         return _read_only(area_centroid(self.corners))
 
+    @cached_property
+    def coverage(self) -> np.ndarray:
+        """(P,) the share of each patch that blocks light (1 but on alpha-cut surfaces: `opacity.coverage`)."""
+        if self.opacity is None:
+            return _read_only(np.ones(len(self.corners)))
+        return _read_only(coverage(self.opacity))
+
     def points(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Bilinear points of every patch at parameters s, t (broadcast): (P, *s.shape, 3)."""
         return bilinear(self.corners, s, t)
@@ -148,13 +159,18 @@ def split_counts(scene: Scene, subdiv: int | None, patch_size: float) -> np.ndar
     return np.where(scene.is_triangle[:, None], triangle[:, None], np.stack([along_s, along_t], axis=1))
 
 
+def _opacity_rows(patches: Patches, rows: np.ndarray) -> OpacityMaps | None:
+    return None if patches.opacity is None else patches.opacity.rows(rows)
+
+
 def fronts_of(patches: Patches) -> Patches:
     """The front patches alone (backs come after them)."""
     count = patches.front_count
     return Patches(corners=patches.corners[:count], uv=patches.uv[:count], surface=patches.surface[:count],
                    reflectance=patches.reflectance[:count], emission=patches.emission[:count],
                    is_triangle=patches.is_triangle[:count], grid=patches.grid[:count], split=patches.split,
-                   params=patches.params[:count], surface_corners=patches.surface_corners)
+                   params=patches.params[:count], surface_corners=patches.surface_corners,
+                   opacity=_opacity_rows(patches, np.arange(count)))
 
 
 def split_patches(patches: Patches, mask: np.ndarray, backs: np.ndarray, at: np.ndarray | None = None) -> Patches:
@@ -177,6 +193,9 @@ def split_patches(patches: Patches, mask: np.ndarray, backs: np.ndarray, at: np.
     params = np.where(params[None] == 0.5, cut[chosen][:, None, None, :], params[None])  # (n, 4, 4, 2)
     children = bilinear_each(fronts.corners[chosen], params[..., 0], params[..., 1])  # (n, 4, 4, 3)
     child_uv = bilinear_each(fronts.uv[chosen], params[..., 0], params[..., 1])
+    opacity = None
+    if fronts.opacity is not None:
+        opacity_uv = fronts.opacity.uv[np.repeat(np.arange(count), np.where(chosen, 4, 1))].copy()
     repeat = np.where(chosen, 4, 1)
     take = np.repeat(np.arange(count), repeat)
     corners = fronts.corners[take].copy()
@@ -185,6 +204,9 @@ def split_patches(patches: Patches, mask: np.ndarray, backs: np.ndarray, at: np.
     places = (first[:, None] + np.arange(4)[None]).ravel()
     corners[places] = children.reshape(-1, 4, 3)
     uv[places] = child_uv.reshape(-1, 4, 2)
+    if fronts.opacity is not None:
+        opacity_uv[places] = bilinear_each(fronts.opacity.uv[chosen], params[..., 0], params[..., 1]).reshape(-1, 4, 2)
+        opacity = OpacityMaps(fronts.opacity.images, fronts.opacity.index[take], opacity_uv)
     is_triangle = fronts.is_triangle[take].copy()
     is_triangle[places] = (fronts.is_triangle[chosen][:, None] & (rows[None] == 1)).ravel()
     # each child's rectangle in the surface: its parent's, cut at the same parameters (corners 0 and 2)
@@ -194,7 +216,7 @@ def split_patches(patches: Patches, mask: np.ndarray, backs: np.ndarray, at: np.
     patch_params[places] = child_params.reshape(-1, 2, 2)
     refined = Patches(corners=corners, uv=uv, surface=fronts.surface[take], reflectance=fronts.reflectance[take],
                       emission=fronts.emission[take], is_triangle=is_triangle, grid=fronts.grid[take],
-                      split=patches.split, params=patch_params, surface_corners=patches.surface_corners)
+                      split=patches.split, params=patch_params, surface_corners=patches.surface_corners, opacity=opacity)
     return with_back_patches(refined, backs)
 
 
@@ -210,10 +232,14 @@ def with_back_patches(patches: Patches, backs: np.ndarray) -> Patches:
     take = np.concatenate([np.arange(count), fronts])
     corners = np.concatenate([patches.corners, reversed_corners(patches.corners[fronts], patches.is_triangle[fronts])])
     uv = np.concatenate([patches.uv, reversed_corners(patches.uv[fronts], patches.is_triangle[fronts])])
+    opacity = None
+    if patches.opacity is not None:
+        opacity = OpacityMaps(patches.opacity.images, patches.opacity.index[take], np.concatenate(
+            [patches.opacity.uv, reversed_corners(patches.opacity.uv[fronts], patches.is_triangle[fronts])]))
     return Patches(corners=corners, uv=uv, surface=patches.surface[take], reflectance=patches.reflectance[take],
                    emission=patches.emission[take], is_triangle=patches.is_triangle[take], grid=patches.grid[take],
                    split=patches.split, back_of=back_of, twin=twin, params=patches.params[take],
-                   surface_corners=patches.surface_corners)
+                   surface_corners=patches.surface_corners, opacity=opacity)
 
 
 def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
@@ -221,6 +247,7 @@ def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
     """Split every surface N x N (`subdiv`), or by `patch_size` when subdiv is None; surfaces in
     the mask `backs` get back patches too."""
     split = split_counts(scene, subdiv, patch_size)
+    opacity_of = scene.opacity.uv if scene.opacity is not None else np.zeros((len(scene), 4, 2))
     keys = np.concatenate([scene.is_triangle[:, None].astype(np.int64), split], axis=1)
     groups, group_of = np.unique(keys, axis=0, return_inverse=True)
     parts = []
@@ -231,16 +258,19 @@ def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
             weights = np.concatenate([1 - params.sum(axis=2, keepdims=True), params], axis=2)  # (k, 4, 3)
             corners = np.einsum("kcw,gwd->gkcd", weights, scene.corners[members, :3])
             uv = np.einsum("kcw,gwd->gkcd", weights, scene.uv[members, :3])
+            opacity_uv = np.einsum("kcw,gwd->gkcd", weights, opacity_of[members, :3])
             # each piece the whole of its own (degenerate) bilinear map: its children are rectangles of it
             rects = np.broadcast_to(np.array([[0.0, 0.0], [1.0, 1.0]]), (len(params), 2, 2))
         else:
             params, row, col = quad_grid(int(columns), int(rows))
             corners = bilinear(scene.corners[members], params[..., 0], params[..., 1])
             uv = bilinear(scene.uv[members], params[..., 0], params[..., 1])
+            opacity_uv = bilinear(opacity_of[members], params[..., 0], params[..., 1])
             rects = params[:, [0, 2]]
         count = len(params)
         parts.append((np.repeat(members, count), corners.reshape(-1, 4, 3), uv.reshape(-1, 4, 2),
-                      np.tile(np.stack([row, col], axis=1), (len(members), 1)), np.tile(rects, (len(members), 1, 1))))
+                      np.tile(np.stack([row, col], axis=1), (len(members), 1)), np.tile(rects, (len(members), 1, 1)),
+                      opacity_uv.reshape(-1, 4, 2)))
     surface = np.concatenate([p[0] for p in parts])
     order = np.argsort(surface, kind="stable")  # surface by surface, each in its grid order
     surface = surface[order]
@@ -255,6 +285,8 @@ def subdivide(scene: Scene, subdiv: int | None = None, patch_size: float = 0.5,
         split=split,
         params=np.concatenate([p[4] for p in parts])[order],
         surface_corners=np.asarray(scene.corners, dtype=np.float64),
+        opacity=None if scene.opacity is None else OpacityMaps(
+            scene.opacity.images, scene.opacity.index[surface], np.concatenate([p[5] for p in parts])[order]),
     )
     return patches if backs is None else with_back_patches(patches, backs)
 

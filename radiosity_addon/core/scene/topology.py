@@ -1,7 +1,7 @@
 """Which surfaces form closed meshes: surfaces sharing edges (corners equal up to a quantum of
 the scene size) are connected; a component is closed when every edge is used by exactly two of
 its faces in opposite directions (consistently oriented), and outward when its signed volume is
-positive (fronts face away from the enclosed volume). Vectorized: edge keys by `np.unique`,
+positive (fronts face away from the enclosed volume). Vectorized: edge keys by `rows.row_labels`,
 components by label propagation with pointer jumping (O(N log N))."""
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import Scene
+from .rows import row_labels
 
 QUANTUM = 1e-7  # corners closer than this fraction of the scene size are the same point
 
@@ -33,8 +34,7 @@ def _directed_edges(scene: Scene):
     surface of each."""
     size = max(scene.diameter, 1e-30)
     points = np.round(scene.corners.reshape(-1, 3) / (QUANTUM * size)).astype(np.int64)
-    _, ids = np.unique(points, axis=0, return_inverse=True)
-    ids = ids.reshape(-1, 4)
+    ids = row_labels(points).reshape(-1, 4)
     start, end = ids, np.roll(ids, -1, axis=1)
     keep = start != end
     surface = np.repeat(np.arange(len(scene)), 4).reshape(-1, 4)
@@ -62,17 +62,17 @@ def _labels(count: int, pairs: np.ndarray) -> np.ndarray:
 def components(scene: Scene) -> Components:
     edges, owner = _directed_edges(scene)
     undirected = np.sort(edges, axis=1)
-    keys, edge_id, uses = np.unique(undirected, axis=0, return_inverse=True, return_counts=True)
-    edge_id = edge_id.ravel()
+    edge_id = row_labels(undirected)
+    uses = np.bincount(edge_id)  # per distinct edge
     # surfaces sharing an edge are joined: pair each use with the edge's first user
-    first_user = np.full(len(keys), -1)
+    first_user = np.full(len(uses), -1)
     first_user[edge_id[::-1]] = owner[::-1]
     label = _labels(len(scene), np.stack([owner, first_user[edge_id]], axis=1))
     _, label = np.unique(label, return_inverse=True)
     count = int(label.max()) + 1
     # consistently oriented and closed: each undirected edge used twice, once each way
     forward = (edges[:, 0] < edges[:, 1]).astype(np.int64)
-    balance = np.bincount(edge_id, weights=2 * forward - 1, minlength=len(keys))
+    balance = np.bincount(edge_id, weights=2 * forward - 1, minlength=len(uses))
     edge_ok = (uses == 2) & (balance == 0)
     component_of_edge = label[owner]
     closed = np.ones(count, dtype=bool)

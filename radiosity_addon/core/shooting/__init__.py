@@ -3,7 +3,7 @@ a shot's light to them, and the same pass over lightmap texels for the direct li
 both methods and the lightmaps."""
 
 from .direct import (SOLVE_EMITTER_PIECES, DirectLightWork, MeasuredDirectLight, direct_light_at_elements,
-                     direct_shooters, emitter_pieces, emitter_shooters, lamps_as_shooters, light_at_points,
+                     direct_shooters, emitter_pieces, emitter_shooters, lamps_as_shooters, light_at_points, light_at_receivers,
                      patch_scale_shots, same_shots, shoot_lamps, shoot_sky)
 from .elements import ElementLayout, ElementTextures, element_areas, element_centers, element_parameters, patch_means
 from .lamps import lamp_shooters
@@ -14,5 +14,5 @@ from .texel_pass import TexelReceivers
 
 __all__ = ["MAX_SHOTS", "SOLVE_EMITTER_PIECES", "ShotVisibility", "shot_records", "surface_visibility", "DirectLightWork", "MeasuredDirectLight", "ElementLayout", "ElementTextures", "PatchBuffers", "PatchShooters", "Shooter",
            "ShootingPass", "TexelReceivers", "direct_light_at_elements", "direct_shooters", "emitter_pieces", "emitter_shooters", "element_areas",
-           "element_centers", "element_parameters", "lamp_shooters", "lamps_as_shooters", "light_at_points", "patch_means", "patch_scale_shots", "same_shots", "shoot_lamps",
+           "element_centers", "element_parameters", "lamp_shooters", "lamps_as_shooters", "light_at_points", "light_at_receivers", "patch_means", "patch_scale_shots", "same_shots", "shoot_lamps",
            "shoot_sky"]

@@ -150,11 +150,21 @@ def light_at_points(res: Resources, scene: Scene, patches: Patches, points: np.n
     `shooters` (lamps, the sun, emitters' pieces), each shot with its own visibility map of
     `resolution` (the `visibility` variant): the texel pass, for lightmap texels and for
     refinement's probe points alike."""
+    return light_at_receivers(res, scene, patches, points, patches.normal[owners], patches.plane[owners], shooters,
+                              visibility, resolution, occlusion, capacity)
+
+
+def light_at_receivers(res: Resources, scene: Scene, patches: Patches, points: np.ndarray, normals: np.ndarray,
+                       planes: np.ndarray, shooters: list[Shooter], visibility: str, resolution: int, occlusion: bool,
+                       capacity: int = MAX_SHOTS, clusters=None) -> np.ndarray:
+    """(N, 3) light H that `points` (N, 3) with `normals` (N, 3), looked up as points of the
+    surface sides `planes` (N,) (`Patches.plane`), gather from `shooters` (`light_at_points`);
+    with `clusters` the clusters' faces are drawn for their rectangles (`surface_visibility`)."""
     if not shooters or len(points) == 0:
         return np.zeros((len(points), 3))
     with res.gpu.resources() as scoped:
-        shots = surface_visibility(scoped, scene, patches, resolution, visibility, occlusion, capacity)
-        receivers = TexelReceivers(scoped, points, patches.normal[owners], patches.plane[owners], "exact", shots)
+        shots = surface_visibility(scoped, scene, patches, resolution, visibility, occlusion, capacity, clusters)
+        receivers = TexelReceivers(scoped, points, normals, planes, "exact", shots)
         receivers.shoot_all(shooters)
         return receivers.read_light()
 

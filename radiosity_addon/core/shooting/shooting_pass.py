@@ -40,7 +40,10 @@ class PatchBuffers:
         self.buffers = {
             "PATCH_CORNERS": res.buffer(pad(patches.corners, np.zeros((len(patches), 4, 1))).tobytes()),
             "PATCH_NORMAL_AREA": res.buffer(pad(patches.normal, patches.area[:, None]).tobytes()),
-            "PATCH_REFLECTANCE": res.buffer(pad(patches.reflectance, np.zeros((len(patches), 1))).tobytes()),
+            # what is reflected into the residual: an alpha-cut patch reflects on its opaque share only
+            # (shots use its whole polygon), its B = E + ρ H holds where it is opaque
+            "PATCH_REFLECTANCE": res.buffer(pad(patches.reflectance * patches.coverage[:, None],
+                                                np.zeros((len(patches), 1))).tobytes()),
             "ELEMENT_WEIGHTS": res.buffer(textures.weights.astype(np.float32).tobytes()),
             "SHOT_ENERGY": res.buffer(reserve=16 * MAX_SHOTS),  # per shot: hit, reflected RGB
             "PATCH_PLANE": res.buffer(patch_planes(patches, cluster_of)),

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..gpu import Resources, texture_unit, uniform_block
 from ..scene import Patches, Scene, surface_patches
-from ..visibility import VARIANTS, HemicubeAtlas, VisibilityMap
+from ..visibility import VARIANTS, DrawnFaces, HemicubeAtlas, VisibilityMap
 from .shooters import DIRECTIONAL, SKY, Shooter
 
 MAX_SHOTS = 64  # records per uniform block: 64 x (176 + 64) bytes, within GL's 16 KiB guarantee
@@ -114,10 +114,11 @@ class ShotVisibility:
 
     def __init__(self, res: Resources, patches: Patches, resolution: int, variant: str, scene_diameter: float,
                  occlusion: bool = True, capacity: int = MAX_SHOTS, kept_as: tuple | None = None,
-                 skip_of: np.ndarray | None = None):
-        """The item buffers show `patches`; `kept_as` (a key naming them, e.g. `surface_visibility`'s):
-        the atlas and the map are the GPU's kept ones for it (`GPU.kept`), not this scope's;
-        `skip_of`: a shooter's patch -> the item a map leaves out for it (`patches.drawn`)."""
+                 skip_of: np.ndarray | None = None, drawn: DrawnFaces | None = None):
+        """The item buffers show `patches` (some as the faces `drawn` for them); `kept_as` (a key naming
+        them, e.g. `surface_visibility`'s): the atlas and the map are the GPU's kept ones for it
+        (`GPU.kept`), not this scope's; `skip_of`: a shooter's patch -> the item a map leaves out for it
+        (`patches.drawn`)."""
         self.res, self.patches, self.resolution, self.occlusion = res, patches, resolution, occlusion
         self.variant, self.diameter = VARIANTS[variant], scene_diameter
         self.name = variant
@@ -125,13 +126,14 @@ class ShotVisibility:
         self.skip_of = patches.drawn if skip_of is None else skip_of
         self.atlas = None
         self._map = None
+        self.drawn = drawn
         if self.variant.hemicube:
             self.capacity = min(capacity, MAX_SHOTS)
             if occlusion:
                 self.atlas = self._own_or_kept(
                     ("atlas", hemicube_resolution(resolution), self.capacity),
                     lambda scope: HemicubeAtlas(scope, patches, hemicube_resolution(resolution), scene_diameter,
-                                                max_slots=self.capacity))
+                                                max_slots=self.capacity, drawn=drawn))
                 self.capacity = min(self.capacity, self.atlas.slots)
         else:
             self.capacity = 1
@@ -146,7 +148,7 @@ class ShotVisibility:
             variant = "plain" if self.variant.hemicube else self.name  # a sun's map needs no tessellation
             self._map = self._own_or_kept(
                 ("map", variant, self.resolution),
-                lambda scope: VisibilityMap(scope, self.patches, self.resolution, variant, self.diameter))
+                lambda scope: VisibilityMap(scope, self.patches, self.resolution, variant, self.diameter, self.drawn))
         return self._map
 
     def _own_or_kept(self, what: tuple, make):
@@ -217,17 +219,31 @@ class ShotVisibility:
 
 
 def surface_visibility(res: Resources, scene: Scene, patches: Patches, resolution: int, variant: str,
-                       occlusion: bool = True, capacity: int = MAX_SHOTS) -> ShotVisibility:
+                       occlusion: bool = True, capacity: int = MAX_SHOTS, clusters=None) -> ShotVisibility:
     """The texel pass's visibility for receivers on `patches`: item buffers of the surfaces
     (`surface_patches`: one item per surface side), not of the patches. A texel pass looks up
     only the receiver's plane and, for what shows in front of it, that item's plane and outline,
     which a surface gives as its patches together would; so its maps cost the surfaces' triangles
     however finely refinement split them, and they are the same for every split: kept on the GPU
     for the job (`GPU.kept`), and not drawn again for the same shots (the emitters' pieces of every
-    refinement round, the direct light and the lightmaps at one resolution)."""
+    refinement round, the direct light and the lightmaps at one resolution). With `clusters`
+    (`scene.face_clusters`, whose proxies `scene` holds) a cluster's rectangle is drawn as its faces:
+    what the lightmaps' texels see has the faces' own shape, and any face of a texel's cluster is seen
+    as its plane."""
     surfaces = surface_patches(scene, patches)
     digest = hashlib.sha1(np.ascontiguousarray(surfaces.corners).tobytes())
     digest.update(np.ascontiguousarray(surfaces.twin).tobytes())
+    if surfaces.opacity is not None:
+        digest.update(surfaces.opacity.digest())
+    drawn = None
+    if clusters is not None and not clusters.is_identity:
+        faces = np.flatnonzero(clusters.merged[clusters.proxy_of_face])
+        opacity = clusters.faces.opacity
+        drawn = DrawnFaces(corners=clusters.faces.corners[faces], patch=clusters.proxy_of_face[faces],
+                           opacity=None if opacity is None else opacity.rows(faces))
+        digest.update(np.ascontiguousarray(drawn.corners).tobytes())
+        if drawn.opacity is not None:
+            digest.update(drawn.opacity.digest())
     # a shooter's patch leaves out its surface: item k is surface k's front
     return ShotVisibility(res, surfaces, resolution, variant, scene.diameter, occlusion, capacity,
-                          kept_as=("surfaces", digest.hexdigest()), skip_of=np.asarray(patches.surface))
+                          kept_as=("surfaces", digest.hexdigest()), skip_of=np.asarray(patches.surface), drawn=drawn)

@@ -10,11 +10,17 @@ import numpy as np
 
 from ..gpu import GPU
 from ..scene import MAX_REFLECTANCE, Patches, Scene
+from ..scene.opacity import coverage
 from .rasterize import footprint_means
 
+MIN_COVER = 0.05  # an alpha-cut footprint clearer than this keeps its albedo as baked (nearly nothing of it reflects)
 
-def _means(gpu: GPU, scene: Scene, owners: np.ndarray, corners_uv: np.ndarray, fallback: tuple):
-    """(reflectance, emission) per footprint: map means where a map covers it, else `fallback`."""
+
+def _means(gpu: GPU, scene: Scene, owners: np.ndarray, corners_uv: np.ndarray, fallback: tuple, cover=None):
+    """(reflectance, emission) per footprint: map means where a map covers it, else `fallback`. A
+    map's albedo on an alpha-cut surface is alpha times its colour (as Cycles bakes it): divided by
+    the footprint's opaque share `cover` (per footprint; None: all opaque), it is the albedo where the
+    surface is, which its patches reflect with (shooting and visibility let the clear share through)."""
     reflectance, emission = (np.array(values, dtype=np.float64) for values in fallback)
     for name, material in scene.material_maps.items():
         surfaces = scene.object_surfaces.get(name)
@@ -24,7 +30,10 @@ def _means(gpu: GPU, scene: Scene, owners: np.ndarray, corners_uv: np.ndarray, f
         image = np.concatenate([material.albedo, material.emission], axis=2)
         means, texels = footprint_means(gpu, corners_uv[mine], image)
         covered = texels > 0
-        reflectance[mine[covered]] = np.clip(means[covered, :3], 0.0, MAX_REFLECTANCE)
+        albedo = means[covered, :3]
+        if cover is not None:
+            albedo = albedo / np.maximum(cover[mine[covered]], MIN_COVER)[:, None]
+        reflectance[mine[covered]] = np.clip(albedo, 0.0, MAX_REFLECTANCE)
         emission[mine[covered]] = np.maximum(means[covered, 3:], 0.0)
     return reflectance, emission
 
@@ -33,8 +42,9 @@ def surfaces_with_material_maps(gpu: GPU, scene: Scene, maps: dict) -> Scene:
     """`scene` with `maps` (object -> MaterialMap) attached and each mapped surface's reflectance
     and emission replaced by its footprint's means (a surface smaller than a texel keeps its own)."""
     mapped = dataclasses.replace(scene, material_maps=dict(maps))
+    cover = None if scene.opacity is None else coverage(scene.opacity)
     reflectance, emission = _means(gpu, mapped, np.arange(len(scene)), scene.uv,
-                                   (scene.reflectance, scene.emission))
+                                   (scene.reflectance, scene.emission), cover)
     return dataclasses.replace(mapped, reflectance=reflectance, emission=emission)
 
 
@@ -43,6 +53,6 @@ def patch_material_values(gpu: GPU, scene: Scene, patches: Patches) -> tuple[np.
     takes its front's); patches a map does not cover keep their surface's values."""
     fronts = patches.front_count
     reflectance, emission = _means(gpu, scene, patches.surface[:fronts], patches.uv[:fronts],
-                                   (patches.reflectance[:fronts], patches.emission[:fronts]))
+                                   (patches.reflectance[:fronts], patches.emission[:fronts]), patches.coverage[:fronts])
     drawn = patches.drawn  # fronts come first; each back copies its front
     return reflectance[drawn], emission[drawn]

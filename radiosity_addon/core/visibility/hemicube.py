@@ -18,7 +18,9 @@ from ..gpu import FORM_FACTOR_ONE, MAX_WORK_GROUPS, Resources, render_indirect, 
 from ..scene import Patches
 from ..scene.geometry import tangent_frames
 from .face_culling import COMMAND_WORDS, draw_commands, triangle_clusters
-from .item_geometry import VERTEX_FORMAT, VERTEX_FORMAT_WITHOUT_LOOKUP, item_geometry
+from .item_geometry import DrawnFaces, item_geometry, vertex_format
+from .opacity import OpacityAtlas
+from .opacity import defines as opacity_defines
 
 ATLAS_LIMIT = 4096  # atlas side in pixels (llvmpipe allows 16384; 4096 keeps memory modest)
 NO_PATCH = 0
@@ -95,7 +97,7 @@ class HemicubeAtlas:
     id + 1, or `back_item` where the back is not simulated; 0: nothing)."""
 
     def __init__(self, res: Resources, patches: Patches, resolution: int, scene_diameter: float,
-                 max_slots: int | None = None, used_slots: int | None = None):
+                 max_slots: int | None = None, used_slots: int | None = None, drawn: DrawnFaces | None = None):
         ctx = res.ctx
         self.ctx = ctx
         self.patches = patches
@@ -117,11 +119,16 @@ class HemicubeAtlas:
         target = (self.atlas_size[0], min(self.atlas_size[1], -(-self.slots // self.tiles_per_row) * 3 * resolution))
         self.row_length = self.patch_count + 1  # the last column: backs of patches
 
-        geometry = item_geometry(patches, face_pixels=resolution * resolution * 3 // 5)
+        geometry = item_geometry(patches, face_pixels=resolution * resolution * 3 // 5, drawn=drawn)
         self.looked_up_surfaces = geometry.looked_up
         looked_up = geometry.looked_up > 0  # else a shader without the lookup (its varyings cost fill)
+        textured = geometry.opacity_index is not None and bool((geometry.opacity_index >= 0).any())
+        self.opacity = None
+        if textured:  # alpha-cut surfaces: their fragments go where the texture's alpha is under the cutoff
+            self.opacity = OpacityAtlas(res, patches.opacity if patches.opacity is not None else drawn.opacity)
+            geometry.vertices["opacity_rect"] = self.opacity.vertex_rects(geometry.opacity_index)
         self.program = res.gpu.program("hemicube_item_buffer.vert", "hemicube_item_buffer.frag",
-                                       defines={"LOOKUP": int(looked_up)})
+                                       defines={"LOOKUP": int(looked_up), **opacity_defines(textured)})
         self.uniforms = {"near": NEAR * scene_diameter, "far": 4.0 * scene_diameter, "back_item": self.row_length}
         self.clusters = triangle_clusters(geometry.vertices["p"], geometry.indices)
         self.vertex_buffer = res.buffer(geometry.vertices.tobytes())
@@ -136,15 +143,12 @@ class HemicubeAtlas:
             "LOOKUP_TABLE": res.buffer(geometry.table.tobytes()),
             "LOOKUP_TWINS": res.buffer(geometry.twins.tobytes()),
         } if looked_up else {}
-        vertex_format, attributes = VERTEX_FORMAT, ["in_position", "in_normal", "in_patch", "in_twin", "in_st",
-                                                   "in_cuts", "in_bins", "in_table", "in_ef"]
-        if not looked_up:
-            vertex_format, attributes = VERTEX_FORMAT_WITHOUT_LOOKUP, attributes[:4]
+        fields, attributes = vertex_format(looked_up, textured)
         self.instance_buffer = res.buffer(reserve=self.slots * 5 * 17 * 4)
         self.vao = res.vertex_array(
             self.program,
             [
-                (self.vertex_buffer, vertex_format, *attributes),
+                (self.vertex_buffer, fields, *attributes),
                 (self.instance_buffer, "3f 3f 3f 3f 4f 1f/i",
                  "in_eye", "in_right", "in_up", "in_forward", "in_tile", "in_up_min"),
             ],
@@ -172,6 +176,8 @@ class HemicubeAtlas:
             self.program[name] = value
         for name, buffer in self.lookup_buffers.items():
             buffer.bind_to_storage_buffer(storage(name))
+        if self.opacity is not None:
+            self.opacity.bind(texture_unit("OPACITY"))
         commands = draw_commands(self.clusters, instances)
         self.triangles_drawn += int(commands[:, 0].sum()) // 3
         self.framebuffer.use()

@@ -28,6 +28,9 @@ import numpy as np
 
 from ..gpu import Resources, render, texture_unit
 from ..scene import Patches
+from .item_geometry import DrawnFaces
+from .opacity import OpacityAtlas
+from .opacity import defines as opacity_defines
 
 TESSELLATION = 32  # most segments per patch side
 # Geometry shader instances per patch (each draws every k-th row of the grid): fewer is faster
@@ -61,23 +64,46 @@ VARIANTS = {
 class VisibilityMap:
     """A resolution x resolution item buffer of all patches, seen from a point."""
 
-    def __init__(self, res: Resources, patches: Patches, resolution: int, variant: str, scene_diameter: float):
+    def __init__(self, res: Resources, patches: Patches, resolution: int, variant: str, scene_diameter: float,
+                 drawn: DrawnFaces | None = None):
+        """`drawn`: faces drawn for some patches instead of their quads (`item_geometry.DrawnFaces`)."""
         if variant not in VARIANTS:
             raise ValueError(f"unknown visibility variant '{variant}' (choose {', '.join(VARIANTS)})")
         ctx = res.ctx
         self.ctx = ctx
         self.resolution = resolution
         self.variant = VARIANTS[variant]  # "hemicube": the map of a sun (orthographic: no tessellation)
-        self.program = self._link(res.gpu, self.variant.tessellation)
         self.scene_diameter = scene_diameter
         count = patches.front_count  # a back is drawn as its front seen from behind (its twin id)
-        vertices = np.empty(count * 4, dtype=[("p", "f4", 3), ("id", "u4"), ("twin", "i4")])
-        vertices["p"] = patches.corners[:count].reshape(-1, 3)
-        vertices["id"] = np.repeat(np.arange(count, dtype=np.uint32), 4)
-        vertices["twin"] = np.repeat(patches.twin[:count].astype(np.int32), 4)
+        corners, ids = patches.corners[:count], np.arange(count)
+        maps = patches.opacity if patches.opacity is not None else (drawn.opacity if drawn is not None else None)
+        opacity_index = patches.opacity.index[:count] if patches.opacity is not None else np.full(count, -1)
+        opacity_uv = patches.opacity.uv[:count] if patches.opacity is not None else np.zeros((count, 4, 2))
+        if drawn is not None and len(drawn.patch):
+            own = ~np.isin(ids, drawn.patch)
+            corners, ids = np.concatenate([corners[own], drawn.corners]), np.concatenate([ids[own], drawn.patch])
+            opaque = drawn.opacity is None
+            opacity_index = np.concatenate([opacity_index[own], np.full(len(drawn.patch), -1) if opaque
+                                            else drawn.opacity.index])
+            opacity_uv = np.concatenate([opacity_uv[own], np.zeros((len(drawn.patch), 4, 2)) if opaque
+                                         else drawn.opacity.uv])
+        textured = maps is not None and bool((opacity_index >= 0).any())
+        self.program = self._link(res.gpu, self.variant.tessellation, textured)
+        vertices = np.empty(len(ids) * 4, dtype=[("p", "f4", 3), ("id", "u4"), ("twin", "i4"),
+                                                 ("opacity_uv", "f4", 2), ("opacity_rect", "i4", 4)])
+        vertices["p"] = corners.reshape(-1, 3)
+        vertices["id"] = np.repeat(ids.astype(np.uint32), 4)
+        vertices["twin"] = np.repeat(patches.twin[ids].astype(np.int32), 4)
+        vertices["opacity_uv"] = opacity_uv.reshape(-1, 2)
+        vertices["opacity_rect"] = 0
+        self.opacity = None
+        if textured:
+            self.opacity = OpacityAtlas(res, maps)
+            vertices["opacity_rect"] = np.repeat(self.opacity.vertex_rects(opacity_index), 4, axis=0)
         self.vertex_buffer = res.buffer(vertices.tobytes())
-        self.vao = res.vertex_array(self.program, [(self.vertex_buffer, "3f 1u 1i", "in_position", "in_patch",
-                                                    "in_twin")])
+        fields = "3f 1u 1i " + ("2f 4i" if textured else "24x")
+        names = ["in_position", "in_patch", "in_twin"] + (["in_opacity_uv", "in_opacity_rect"] if textured else [])
+        self.vao = res.vertex_array(self.program, [(self.vertex_buffer, fields, *names)])
         self.items = res.scratch_texture((resolution, resolution), 1, dtype="u4")  # `render` clears them
         self.distances = res.scratch_texture((resolution, resolution), 1, dtype="f4")
         self.depth = res.scratch_depth((resolution, resolution))
@@ -85,7 +111,7 @@ class VisibilityMap:
         self.drawn_view = None  # (eye, axes, skip, ortho extent) the map shows now
 
     @staticmethod
-    def _link(gpu, n: int):
+    def _link(gpu, n: int, textured: bool = False):
         error = None
         for invocations in GEOMETRY_INVOCATIONS:
             invocations = min(n, invocations)
@@ -94,7 +120,7 @@ class VisibilityMap:
                     "hemisphere_item_buffer.vert", "hemisphere_item_buffer.frag", "hemisphere_item_buffer.geom",
                     defines={"TESSELLATION": n, "INVOCATIONS": invocations,
                              "MAX_VERTICES": 2 * (n + 1) * -(-n // invocations),
-                             "SEGMENT_ANGLE": SEGMENT_ANGLE if n > 1 else 1e9},
+                             "SEGMENT_ANGLE": SEGMENT_ANGLE if n > 1 else 1e9, **opacity_defines(textured)},
                 )
             except Exception as failure:  # moderngl raises plain Errors on compile/link failure
                 error = failure
@@ -118,6 +144,8 @@ class VisibilityMap:
         self.framebuffer.use()
         self.framebuffer.clear(0, 0, 0, 0, depth=1.0)
         ctx.enable_only(ctx.DEPTH_TEST)
+        if self.opacity is not None:
+            self.opacity.bind(texture_unit("OPACITY"))
         render(self.vao, mode=ctx.LINES_ADJACENCY)
         self.drawn_view = view
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import Patches
+from ..scene import OpacityMaps, Patches
 from ..scene.geometry import area_vector, bilinear_each
 from ..scene.neighbours import expanded_ranges
 
@@ -51,10 +51,32 @@ OWN_TRIANGLES = 3  # a vertex's map when it belongs to a patch drawn by its own 
 # Every vertex of a unit carries the unit's record (`unit_record`), passed on flat: a fragment then reads
 # only the cuts, bins and table cell it needs. Reading the record per fragment from a storage buffer took
 # half of draft's 64-pixel form factors on the Cornell box (1.10 -> 0.52 s, llvmpipe; the same rows).
-VERTEX_FORMAT = "3f 3f 1u 1i 2f 4u 4u 4u 4f"  # position, normal, patch, twin, (s, t), the unit's record
-VERTEX_FORMAT_WITHOUT_LOOKUP = "3f 3f 1u 1i 72x"  # the same rows for a shader without the lookup
 VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("st", "f4", 2),
-                ("record", "u4", (4, 4))]
+                ("record", "u4", (4, 4)), ("opacity_uv", "f4", 2), ("opacity_rect", "i4", 4)]
+
+
+def vertex_format(lookup: bool, opacity: bool) -> tuple[str, list[str]]:
+    """The vertex rows' format and attribute names for an item-buffer shader with or without the
+    patch lookup (`(s, t)` and the unit's record) and the opacity test (texture UVs and rectangle)."""
+    fields = "3f 3f 1u 1i " + ("2f 4u 4u 4u 4f" if lookup else "72x") + (" 2f 4i" if opacity else " 24x")
+    names = ["in_position", "in_normal", "in_patch", "in_twin"]
+    names += ["in_st", "in_cuts", "in_bins", "in_table", "in_ef"] if lookup else []
+    names += ["in_opacity_uv", "in_opacity_rect"] if opacity else []
+    return fields, names
+
+
+@dataclass
+class DrawnFaces:
+    """Polygons an item buffer draws for some front patches instead of their own quads: the faces a
+    cluster's rectangle stands for (`scene.face_clusters`), so what is seen has the faces' own shape
+    and the rectangle's id."""
+    corners: np.ndarray  # (n, 4, 3) counter-clockwise from the front, triangles repeating their last corner
+    patch: np.ndarray  # (n,) the front patch each is drawn for
+    opacity: OpacityMaps | None = None  # their opacity textures (None: all opaque)
+
+    @property
+    def is_triangle(self) -> np.ndarray:
+        return np.all(self.corners[:, 3] == self.corners[:, 2], axis=1)
 
 
 @dataclass
@@ -71,55 +93,78 @@ class ItemGeometry:
     # lookup cost more than the triangles it saved)
     table: np.ndarray  # uint32 front patch ids, per surface (ns - 1) x (nt - 1) cells, row-major in t
     twins: np.ndarray  # (fronts,) int32 each front's back patch, -1 when its back is not simulated
+    opacity_index: np.ndarray | None = None  # (vertices,) the opacity texture of each vertex's polygon (None: none)
 
     @property
     def looked_up(self) -> int:
         return len(self.surfaces)
 
 
-def item_geometry(patches: Patches, face_pixels: int | None = None) -> ItemGeometry:
+def item_geometry(patches: Patches, face_pixels: int | None = None, drawn: DrawnFaces | None = None) -> ItemGeometry:
     """The item-buffer geometry of `patches`' fronts: looked-up units drawn once, the rest patch by
     patch. With `face_pixels` (the pixels of one face of the maps drawn), units are looked up only
-    where that saves time (LOOKUP_PIXELS_PER_TRIANGLE); with 0 never."""
+    where that saves time (LOOKUP_PIXELS_PER_TRIANGLE); with 0 never. `drawn`: faces drawn for some
+    patches instead of their quads (those patches are never looked up)."""
     count = patches.front_count
-    lookup = _lookup_units(patches) if face_pixels != 0 else None
+    lookup = _lookup_units(patches, None if drawn is None else drawn.patch) if face_pixels != 0 else None
     if lookup is not None and face_pixels is not None:
         replaced = np.isin(lookup["unit_of"], lookup["units"])
-        drawn = int(np.where(lookup["skewed"] == TRIANGLE_MAP, 1, 2).sum())
-        saved = int(np.where(patches.is_triangle[:count][replaced], 1, 2).sum()) - drawn
+        unit_triangles = int(np.where(lookup["skewed"] == TRIANGLE_MAP, 1, 2).sum())
+        saved = int(np.where(patches.is_triangle[:count][replaced], 1, 2).sum()) - unit_triangles
         if saved < LOOKUP_PIXELS_PER_TRIANGLE * face_pixels:
             lookup = None
     direct = np.ones(count, dtype=bool) if lookup is None else ~np.isin(lookup["unit_of"], lookup["units"])
-    vertices, indices = _patch_geometry(patches, np.flatnonzero(direct))
+    vertices, indices, opacity_index = _patch_geometry(patches, np.flatnonzero(direct), drawn)
     twins = patches.twin[:count].astype(np.int32)
     if lookup is None:
         empty = np.zeros((0, RECORD, 4), dtype=np.uint32)
         return ItemGeometry(vertices, indices, empty, np.zeros(1, np.float32), np.zeros(1, np.uint32),
-                            np.zeros(1, np.uint32), twins)
+                            np.zeros(1, np.uint32), twins, opacity_index)
     quads, quad_indices = _unit_geometry(lookup["corners"], lookup["corner_st"], lookup["skewed"] == TRIANGLE_MAP,
                                          unit_record(lookup["records"]), len(vertices))
+    if opacity_index is not None:  # looked-up units are opaque (`_lookup_units`)
+        opacity_index = np.concatenate([opacity_index, np.full(len(quads), -1, dtype=np.int64)])
     return ItemGeometry(np.concatenate([vertices, quads]), np.concatenate([indices, quad_indices]),
-                        lookup["records"], lookup["cuts"], lookup["bins"], lookup["table"], twins)
+                        lookup["records"], lookup["cuts"], lookup["bins"], lookup["table"], twins, opacity_index)
 
 
-def _patch_geometry(patches: Patches, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and triangles of the front patches `rows`: a back patch is drawn as its front seen from
-    behind (the twin id), so coincident sides never fight over depth."""
-    count = len(rows)
+def _patch_geometry(patches: Patches, rows: np.ndarray, drawn: DrawnFaces | None = None):
+    """Vertices and triangles of the front patches `rows` (or of the faces `drawn` for them), and each
+    vertex's opacity texture (None: the patches have none): a back patch is drawn as its front seen
+    from behind (the twin id), so coincident sides never fight over depth."""
+    corners, normals, ids = patches.corners[rows], patches.normal[rows], rows
+    is_triangle = patches.is_triangle[rows]
+    textured = patches.opacity is not None or (drawn is not None and drawn.opacity is not None)
+    opacity_index = patches.opacity.index[rows] if patches.opacity is not None else np.full(len(rows), -1)
+    opacity_uv = patches.opacity.uv[rows] if patches.opacity is not None else np.zeros((len(rows), 4, 2))
+    if drawn is not None and len(drawn.patch):
+        own = ~np.isin(rows, drawn.patch)
+        area = area_vector(drawn.corners)
+        corners = np.concatenate([corners[own], drawn.corners])
+        normals = np.concatenate([normals[own], area / np.linalg.norm(area, axis=1, keepdims=True)])
+        ids = np.concatenate([rows[own], drawn.patch])
+        is_triangle = np.concatenate([is_triangle[own], drawn.is_triangle])
+        opaque = drawn.opacity is None
+        opacity_index = np.concatenate([opacity_index[own], np.full(len(drawn.patch), -1) if opaque
+                                        else drawn.opacity.index])
+        opacity_uv = np.concatenate([opacity_uv[own], np.zeros((len(drawn.patch), 4, 2)) if opaque
+                                     else drawn.opacity.uv])
+    count = len(ids)
     vertices = np.empty(count * 4, dtype=VERTEX_DTYPE)
-    vertices["p"] = patches.corners[rows].reshape(-1, 3)
-    vertices["n"] = np.repeat(patches.normal[rows], 4, axis=0)
-    vertices["id"] = np.repeat(rows.astype(np.uint32), 4)
-    vertices["twin"] = np.repeat(patches.twin[rows].astype(np.int32), 4)
+    vertices["p"] = corners.reshape(-1, 3)
+    vertices["n"] = np.repeat(normals, 4, axis=0)
+    vertices["id"] = np.repeat(ids.astype(np.uint32), 4)
+    vertices["twin"] = np.repeat(patches.twin[ids].astype(np.int32), 4)
     vertices["st"] = 0.0
     vertices["record"] = 0
     vertices["record"][:, 2, 1] = OWN_TRIANGLES
+    vertices["opacity_uv"] = opacity_uv.reshape(-1, 2)
+    vertices["opacity_rect"] = 0
     base = (np.arange(count) * 4)[:, None]
-    is_triangle = patches.is_triangle[rows]
     indices = np.where(is_triangle[:, None], base + np.array([0, 1, 2, 0, 1, 2]), base + np.array([0, 1, 2, 0, 2, 3]))
     keep = np.ones_like(indices, dtype=bool)
     keep[is_triangle, 3:] = False  # the degenerate half
-    return vertices, indices[keep].astype(np.uint32)
+    return vertices, indices[keep].astype(np.uint32), np.repeat(opacity_index, 4) if textured else None
 
 
 def unit_record(records: np.ndarray) -> np.ndarray:
@@ -146,6 +191,8 @@ def _unit_geometry(corners: np.ndarray, corner_st: np.ndarray, triangle: np.ndar
     vertices["twin"] = -1
     vertices["st"] = corner_st.reshape(-1, 2)
     vertices["record"] = np.repeat(records, 4, axis=0)
+    vertices["opacity_uv"] = 0.0
+    vertices["opacity_rect"] = 0
     base = first_vertex + (np.arange(count) * 4)[:, None]
     indices = base + np.array([0, 1, 2, 0, 2, 3])
     keep = np.ones_like(indices, dtype=bool)
@@ -183,8 +230,9 @@ def _units(patches: Patches):
     return unit_of.ravel(), unit_corners, is_grid_triangle
 
 
-def _lookup_units(patches: Patches) -> dict | None:
-    """The units drawn once with a patch table (`_units`), and their records, cuts and tables (None: none can be)."""
+def _lookup_units(patches: Patches, drawn_for: np.ndarray | None = None) -> dict | None:
+    """The units drawn once with a patch table (`_units`), and their records, cuts and tables (None:
+    none can be). Patches `drawn_for` (drawn as faces of their own) keep their units out."""
     count = patches.front_count
     if patches.surface_corners is None or count == 0:
         return None
@@ -194,6 +242,10 @@ def _lookup_units(patches: Patches) -> dict | None:
     surfaces = len(corners)
     per_surface = np.bincount(surface, minlength=surfaces)
     known = np.isfinite(params).all(axis=(1, 2))
+    if patches.opacity is not None:  # an alpha-cut surface is drawn patch by patch, with its texture UVs
+        known[np.isin(surface, surface[patches.opacity.index[:count] >= 0])] = False
+    if drawn_for is not None and len(drawn_for):
+        known[np.isin(surface, surface[drawn_for[drawn_for < count]])] = False
     candidate = (per_surface >= 2) & (np.bincount(surface, weights=~known, minlength=surfaces) == 0)
     candidate &= np.where(is_grid_triangle, np.linalg.norm(area_vector(corners), axis=1) > 0, _flat_convex_quad(corners))
     # the patches must be where their rectangles say (the bilinear map of the unit at their corners)
