@@ -8,8 +8,7 @@
 
 in vec3 in_position;
 in vec3 in_normal;      // the triangle's front normal
-in uint in_patch;       // patch id (a front patch)
-in int in_twin;         // its back patch, -1 when its back is not simulated
+in ivec2 in_item;       // the front patch's id, and its back patch (-1 when its back is not simulated)
 #if LOOKUP
 in vec2 in_st;          // the unit's parameters at this corner (visibility/item_geometry.py)
 in uvec4 in_cuts;       // the unit's record (item_geometry.unit_record), the same at its every vertex:
@@ -91,5 +90,5 @@ void main() {
     unit_ef = in_ef;
     surface_st = in_st;
 #endif
-    item = front ? in_patch + 1u : (in_twin >= 0 ? uint(in_twin) + 1u : back_item);
+    item = front ? uint(in_item.x) + 1u : (in_item.y >= 0 ? uint(in_item.y) + 1u : back_item);
 }

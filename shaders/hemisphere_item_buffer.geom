@@ -70,12 +70,13 @@ void main() {
         return;  // wholly behind the eye's hemisphere
     }
     vec3 normal = cross(v_position[2] - v_position[0], v_position[3] - v_position[1]);
-    // A back seen is its twin patch; a single-sided back occludes but receives nothing (item 0).
+    // A back seen is its twin patch; a single-sided back occludes but receives nothing: its id with
+    // the BACK_OF bit (include/shot.glsl), so a lookup knows what hides a receiver behind it.
     // An orthographic view (a sun) looks along its pole from everywhere: the eye point is not where
     // the rays come from (a wall the sun grazes would face away from it).
     vec3 toward_eye = ortho_extent > 0.0 ? -axis_z : eye - v_position[0];
     bool front = dot(toward_eye, normal) > 0.0;
-    uint id = front ? v_patch[0] + 1u : (v_twin[0] >= 0 ? uint(v_twin[0]) + 1u : 0u);
+    uint id = front ? v_patch[0] + 1u : (v_twin[0] >= 0 ? uint(v_twin[0]) + 1u : (v_patch[0] + 1u) | 0x80000000u);
     // Adaptive: as many segments per side as the patch's angular size needs
     // (a chord of SEGMENT_ANGLE radians strays ~angle^2/8 from the curved image).
     float extent = 0.0;

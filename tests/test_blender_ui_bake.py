@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from radiosity_addon.blender import operators, ui_bake
-from radiosity_addon.blender.bake import prepare
+from radiosity_addon.blender.bake import prepare_steps
+from radiosity_addon.blender.progress import BakeClock
 from radiosity_addon.blender.live_preview import PREVIEW_SUFFIX
 
 WAIT_FOR_ESC = """
@@ -59,18 +60,24 @@ class FakeWindowManager:
 
 
 class ButtonBake:
-    """The operator's invoke and modal with a stand-in window manager and status bar."""
+    """The operator's invoke and modal with a stand-in window manager and status bar: the bake is
+    prepared a step a tick (the export, each Cycles pass), then solved."""
 
     def __init__(self, context, preview_interval=None, shading="MATERIAL"):
         self.status, self.reports = [], []
         self.ui = SimpleNamespace(window_manager=FakeWindowManager(shading), window=None,
                                   workspace=SimpleNamespace(status_text_set=self.status.append))
-        plan = prepare(context, context.scene.radiosity.bake_options(context.selected_objects),
-                       preview_interval=preview_interval)
-        self.plan = plan
+        clock = BakeClock()
+        steps = prepare_steps(context, context.scene.radiosity.bake_options(context.selected_objects),
+                              preview_interval=preview_interval, clock=clock)
+        clock.preparing(next(steps))
         self.operator = SimpleNamespace(report=lambda kind, text: self.reports.append((kind, text)),
-                                        _bake=ui_bake.begin(self.ui, plan))
+                                        _bake=ui_bake.begin_preparing(self.ui, steps, clock))
         self.result = {"RUNNING_MODAL"}
+
+    @property
+    def plan(self):
+        return self.operator._bake.plan
 
     def tick(self, event_type="TIMER"):
         event = SimpleNamespace(type=event_type, value="PRESS")
@@ -79,7 +86,7 @@ class ButtonBake:
 
     def run_until(self, condition=lambda: False, timeout=300.0):
         deadline = time.monotonic() + timeout
-        while self.result == {"RUNNING_MODAL"} and not condition():
+        while self.result == {"RUNNING_MODAL"} and (self.plan is None or not condition()):  # prepared first
             assert time.monotonic() < deadline, "the bake never got there"
             self.tick()
             time.sleep(0.02)
@@ -118,6 +125,34 @@ def test_escape_in_the_modal_loop_cancels_and_leaves_the_file_unchanged(monkeypa
     assert bake.run_until() == {"CANCELLED"}
     assert bake.reports[-1][0] == {"WARNING"} and "cancelled" in bake.reports[-1][1]
     bake.assert_ui_given_back()
+    assert support.blend_state() == before
+
+
+def test_the_preparation_runs_a_step_a_tick_and_escape_during_it_changes_nothing():
+    """The export and each Cycles pass of the materials are steps of their own: the status bar says
+    which runs, and the UI answers between them; Esc before the solver starts leaves the file as it
+    was (the sample has its Lightmap UV maps; the Cornell box's made then are taken back: the Esc test)."""
+    context = support.open_blend(support.SAMPLES / "textured.blend", method="progressive", subdivision=2)
+    bake = ButtonBake(context)
+    assert bake.plan is None and bake.operator._bake.clock.stage.startswith("exporting")  # what the next tick does
+    stages = []
+    while bake.plan is None:
+        bake.tick()
+        stages.append(bake.status[-1])
+    assert any("with Cycles" in stage for stage in stages)  # the textured floor's material maps
+    bake.run_until()
+    assert bake.result == {"FINISHED"}
+    context = support.open_blend(support.SAMPLES / "textured.blend", method="progressive", subdivision=2)
+    before = support.blend_state()
+    bake = ButtonBake(context)
+    bake.tick()
+    assert bake.tick("ESC") == {"CANCELLED"} and bake.plan is None
+    context = support.open_blend(support.CORNELL, method="progressive", subdivision=2)
+    before = support.blend_state()
+    bake = ButtonBake(context)
+    assert support.blend_state() != before  # the first step made the Lightmap UV maps
+    assert bake.tick("ESC") == {"CANCELLED"}
+    assert ui_bake.running is None and bake.ui.window_manager.timers == [] and bake.status[-1] is None
     assert support.blend_state() == before
 
 

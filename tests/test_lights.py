@@ -13,6 +13,9 @@ from radiosity_addon.core import point_to_polygon
 from radiosity_addon.core import SceneError, scene_from_dict
 from radiosity_addon.core import SolveSettings
 from radiosity_addon.core import solve
+from radiosity_addon.core.scene import subdivide
+from radiosity_addon.core.shooting.direct import sky_light
+from radiosity_addon.core.shooting.sky import SKY_DIRECTIONS
 
 RHO = 0.8
 FLOOR = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]  # 2 x 2, facing +z
@@ -136,6 +139,22 @@ def test_world_colour_lights_by_sky_fraction(gpu):
     wall_polygon = np.asarray([wall["vertices"]], dtype=float)
     hidden = point_to_polygon(points, np.tile([0.0, 0.0, 1.0], (len(points), 1)), wall_polygon)[:, 0]
     np.testing.assert_allclose(radiosity[:, 0], RHO * 0.5 * (1 - hidden), rtol=0.02)
+
+
+def test_the_sky_from_its_directions_is_the_exact_fraction_beside_a_wall(gpu):
+    """Past SKY_DIRECTIONS points, the sky's light is gathered from its directions' maps
+    (shooting.sky), not a hemi-cube per point: 2 500 floor points, each within 2 % of the exact."""
+    wall = surface("wall", [[1, -1, 0], [1, -1, 2], [1, 1, 2], [1, 1, 0]], 0.0, 0.0)
+    scene = floor_scene(world=[1.0, 1.0, 1.0], extra_surfaces=[wall])
+    patches = subdivide(scene, 1)
+    steps = (np.arange(50) + 0.5) / 50 * 1.9 - 0.95
+    x, y = np.meshgrid(steps, steps)
+    points = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
+    assert len(points) > SKY_DIRECTIONS
+    with gpu.resources() as res:
+        light = sky_light(res, scene, patches, points, np.zeros(len(points), dtype=np.int64), np.ones(3))[:, 0]
+    hidden = point_to_polygon(points, np.tile([0.0, 0.0, 1.0], (len(points), 1)), np.asarray([wall["vertices"]], float))
+    np.testing.assert_allclose(light, 1 - hidden[:, 0], rtol=0.02)
 
 
 def test_lamps_in_the_scene_analysis():

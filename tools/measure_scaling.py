@@ -1,9 +1,11 @@
 """How each stage of a bake grows with the scene: seconds and peak memory per stage on the
-benchmark's furnished rooms (radiosity_addon/bench/rooms.py) from ~1k to ~100k triangles.
+benchmark's furnished rooms (radiosity_addon/bench/rooms.py) from ~1k to ~100k triangles, or on its
+production terrace (bench/production.py: dense meshes, 20 materials in one object, a triangle
+soup, alpha-cut leaves, sun and sky) from ~50k to ~500k.
 
     .venv/bin/python tools/measure_scaling.py --output-dir out/scaling \\
         [--triangles 1000 4000 16000 64000 100000] [--methods auto] [--quality draft] [--timeout 1800] \\
-        [--cycles 64]
+        [--cycles 64] [--family production --objects 10]
 
 Every (room, method) runs in a process of its own, which builds the room and bakes it stage by
 stage as the add-on does (radiosity_addon/bench/scaling.py: export, material maps, the core
@@ -81,6 +83,8 @@ def main() -> int:
     parser.add_argument("--timeout", type=float, default=1800.0, help="seconds per bake before it is stopped")
     parser.add_argument("--cycles", type=int, default=64, metavar="SAMPLES",
                         help="Cycles' samples per texel on the same rooms (0: no Cycles bakes)")
+    parser.add_argument("--family", choices=("rooms", "production"), default="rooms")
+    parser.add_argument("--objects", type=int, default=10, help="production: about how many objects (1: one)")
     parser.add_argument("--one", nargs=2, metavar=("TRIANGLES", "METHOD"), help=argparse.SUPPRESS)
     parser.add_argument("--one-cycles", nargs=2, metavar=("TRIANGLES", "SIZES"), help=argparse.SUPPRESS)
     parser.add_argument("--replot", action="store_true", help="only redraw DIR/scaling.png from DIR/scaling.json")
@@ -89,15 +93,17 @@ def main() -> int:
         plot(args.output_dir / "scaling.png", json.loads((args.output_dir / "scaling.json").read_text()))
         return 0
     if args.one:
-        from radiosity_addon.bench.scaling import bake_room_in_stages
-        print(json.dumps(bake_room_in_stages(int(args.one[0]), {"quality": args.quality, "method": args.one[1]}),
-                         default=float))
+        from radiosity_addon.bench.scaling import bake_production_in_stages, bake_room_in_stages
+        solve = {"quality": args.quality, "method": args.one[1]}
+        run = (bake_production_in_stages(int(args.one[0]), solve, args.objects) if args.family == "production"
+               else bake_room_in_stages(int(args.one[0]), solve))
+        print(json.dumps(run, default=float))
         return 0
     if args.one_cycles:
         from radiosity_addon.bench.scaling import bake_room_with_cycles
         sizes = json.loads(Path(args.one_cycles[1]).read_text())
-        print(json.dumps(bake_room_with_cycles(int(args.one_cycles[0]), sizes, args.cycles, args.output_dir),
-                         default=float))
+        print(json.dumps(bake_room_with_cycles(int(args.one_cycles[0]), sizes, args.cycles, args.output_dir,
+                                               args.family, args.objects), default=float))
         return 0
     out = args.output_dir
     out.mkdir(parents=True, exist_ok=True)
@@ -118,7 +124,8 @@ def main() -> int:
         (out / "scaling.json").write_text(json.dumps(runs, indent=1, default=float))
         return run
 
-    base = [sys.executable, __file__, "--output-dir", str(out), "--quality", args.quality, "--cycles", str(args.cycles)]
+    base = [sys.executable, __file__, "--output-dir", str(out), "--quality", args.quality, "--cycles", str(args.cycles),
+            "--family", args.family, "--objects", str(args.objects)]
     for k, method in enumerate(args.methods):
         for triangles in args.triangles:
             run = run_one(triangles, method, base + ["--one", str(triangles), method])

@@ -131,15 +131,16 @@ def _pieces(triangles: int, materials: dict, seed: int) -> list:
     m = max(1, round(n * depth / width))
     floor = shapes.grid([-width / 2, -depth / 2, 0], [width, 0, 0], [0, depth, 0], n, m)
     pieces.append(("Floor", "stone", *floor, None, floor[0][:, :2] / TILE_REPEAT))
-    # walls: the back one (along x at y = depth/2) with a window opening, the side one (along y at x = -width/2)
+    # walls facing the terrace: the back one (along x at y = depth/2) with a window opening, the side
+    # one (along y at x = -width/2)
     per_wall = share["walls"] / 2
     n = _resolution(per_wall, 2 * WALL_HEIGHT / width)
     m = max(1, round(n * WALL_HEIGHT / width))
-    back = shapes.grid([width / 2, depth / 2, 0], [-width, 0, 0], [0, 0, WALL_HEIGHT], n, m)
+    back = shapes.grid([-width / 2, depth / 2, 0], [width, 0, 0], [0, 0, WALL_HEIGHT], n, m)
     centres = back[0][back[1]].mean(axis=1)
     window = (np.abs(centres[:, 0] - 1.5) < 1.2) & (np.abs(centres[:, 2] - 1.6) < 0.7)
     back = (back[0], back[1][~window])
-    side = shapes.grid([-width / 2, depth / 2, 0], [0, -depth, 0], [0, 0, WALL_HEIGHT], max(1, round(n * depth / width)), m)
+    side = shapes.grid([-width / 2, -depth / 2, 0], [0, depth, 0], [0, 0, WALL_HEIGHT], max(1, round(n * depth / width)), m)
     pieces.append(("Walls", "plaster", *shapes.merge(back, side), None, None))
     # furniture as dense rounded boxes
     k = _resolution(share["sofa"] / 4, 12)

@@ -87,7 +87,18 @@ def bake_room_in_stages(triangles: int, solve: dict, lightmaps: dict | None = No
     """Build the room of `triangles` and bake all its meshes with the panel's settings and `solve`
     (SolveSettings fields; a "quality" first sets its preset) and `lightmaps` replaced. Without
     `material_maps` the surfaces keep their materials' mean colours (no Cycles bake)."""
-    built = rooms.build_room(triangles)
+    return bake_in_stages(lambda: rooms.build_room(triangles), triangles, solve, lightmaps, material_maps)
+
+
+def bake_production_in_stages(triangles: int, solve: dict, objects: int = 10, lightmaps: dict | None = None) -> dict:
+    """The same for the production terrace (production.py) of `triangles` in about `objects` objects."""
+    from . import production
+    return bake_in_stages(lambda: production.build_production(triangles, objects), triangles, solve, lightmaps)
+
+
+def bake_in_stages(build, triangles: int, solve: dict, lightmaps: dict | None = None, material_maps: bool = True) -> dict:
+    """`build()` a scene (its summary: "triangles"), then bake its meshes stage by stage."""
+    built = build()
     ensure_registered()
     context = bpy.context
     objects = choose_objects(context, [obj for obj in context.scene.objects if obj.type == "MESH"])
@@ -102,6 +113,8 @@ def bake_room_in_stages(triangles: int, solve: dict, lightmaps: dict | None = No
         with stages.stage("material maps"):
             scene, factors = baked_materials(context, exported, objects, options)
     with core.open_gpu() as gpu:
+        with stages.stage("job"):  # what the solver process reads (solver_process/protocol.py)
+            job_bytes = job_size(scene)
         solution = core.solve(scene, options.solve, gpu=gpu, timer=MeasuredTimer(stages))
         with stages.stage("lightmaps"):
             lightmaps_made = core.bake_lightmaps(scene, solution, options.lightmaps, gpu=gpu,
@@ -116,16 +129,34 @@ def bake_room_in_stages(triangles: int, solve: dict, lightmaps: dict | None = No
             "shots": report.get("shots"), "why": (report.get("method_choice") or {}).get("reason"),
             "seconds": time.perf_counter() - started, "stage_seconds": stages.seconds,
             "stage_peak_mb": stages.peak_mb, "texels": int(sum(i.shape[0] * i.shape[1] for i in images.values())),
+            "clusters": report["counts"].get("clusters", 0), "objects": len(objects), "job_mb": job_bytes / 2 ** 20,
             "sizes": {name: [int(image.shape[1]), int(image.shape[0])] for name, image in images.items()}}
 
 
-def bake_room_with_cycles(triangles: int, sizes: dict, samples: int, directory) -> dict:
-    """The same room (built again: it is deterministic) saved in `directory` and baked by Cycles
-    into lightmaps of `sizes` ({object: [width, height]}: ours) at `samples` per texel, all objects
-    in one bake call (blend_reference.bake_lightmaps): its seconds and this process's peak memory."""
-    from . import blend_reference
-    path = Path(directory) / f"room_{triangles}.blend"
-    built = rooms.save_room(path, triangles)
+def job_size(scene) -> int:
+    """Bytes of the scene's arrays file, as the solver process gets it, written and read back here."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as directory:
+        path = Path(directory) / "scene.npz"
+        core.save_scene(scene, path)
+        core.load_scene(path, require_emitter=False)
+        return path.stat().st_size
+
+
+def bake_room_with_cycles(triangles: int, sizes: dict, samples: int, directory, family: str = "rooms",
+                          objects: int = 10) -> dict:
+    """The same room (built again: it is deterministic; or the production terrace in `objects`
+    objects) saved in `directory` and baked by Cycles into lightmaps of `sizes` ({object: [width,
+    height]}: ours) at `samples` per texel, all objects in one bake call
+    (blend_reference.bake_lightmaps): its seconds and this process's peak memory."""
+    from . import blend_reference, production
+    if family == "production":
+        path = Path(directory) / f"production_{triangles}_{objects}.blend"
+        built = production.save_production(path, triangles, objects)
+    else:
+        path = Path(directory) / f"room_{triangles}.blend"
+        built = rooms.save_room(path, triangles)
     reset_high_water()
     bake = blend_reference.bake_lightmaps(path, sizes, "combined", samples, seed=1)
     return {"triangles_target": triangles, "triangles": built["triangles"], "method": f"cycles {samples} spp",

@@ -21,7 +21,9 @@ from . import apply
 from .errors import BakeError
 from .export import check_emitters, export_scene
 from .lightmap_uv import add_lightmap_uvs, remove_lightmap_uvs
-from .material_bake import bake_material_maps, principled_diffuse_factors, uniform_material_values, uniform_materials
+from .material_bake import (bake_material_maps_steps, principled_diffuse_factors, run_steps, uniform_material_values,
+                            uniform_materials)
+from .progress import BakeClock
 from .lights import render_lamps
 from .live_preview import LivePreview
 from .options import BakeOptions
@@ -66,6 +68,15 @@ def choose_objects(context, objects=None) -> list:
 def prepare(context, options: BakeOptions, objects=None, output_dir=None, preview_interval=None) -> BakePlan:
     """Check, export and hand the solve to a worker (not yet started). `preview_interval`: seconds
     between live previews of a progressive solve (None: none)."""
+    return run_steps(prepare_steps(context, options, objects, output_dir, preview_interval))
+
+
+def prepare_steps(context, options: BakeOptions, objects=None, output_dir=None, preview_interval=None,
+                  clock: BakeClock | None = None):
+    """`prepare` a step at a time: yields what the next step does (the export, each Cycles pass of
+    the materials), so the UI shows it and answers between steps; returns the plan, whose worker
+    reports to `clock` (the bake's, from its start). Closed before it ends, it takes back what it
+    added (the Lightmap UV maps; the material bakes undo their own changes as they close)."""
     baked = choose_objects(context, objects)
     try:
         options.solve.validate()
@@ -78,14 +89,15 @@ def prepare(context, options: BakeOptions, objects=None, output_dir=None, previe
 
     added = add_lightmap_uvs(context, baked, options.uv_margin)
     try:
+        yield f"exporting {len(baked)} object(s)"
         exported = export_scene(context.evaluated_depsgraph_get(), baked,
                                 occluders=None if options.include_unselected else [],
                                 lamps=render_lamps(context.view_layer), world=context.scene.world)
-        scene, diffuse_factors = baked_materials(context, exported, baked, options)
-    except BaseException:
+        scene, diffuse_factors = yield from baked_materials_steps(context, exported, baked, options)
+    except BaseException:  # a fault, or the steps closed (Esc, a file loaded)
         remove_lightmap_uvs(added)
         raise
-    worker = BakeWorker(scene, options.solve, exported.baked_objects, options.lightmaps, preview_interval)
+    worker = BakeWorker(scene, options.solve, exported.baked_objects, options.lightmaps, preview_interval, clock)
     warnings = list(exported.warnings)
     if exported.instances:
         warnings.append(f"{exported.instances} instance(s) block and reflect light but get no lightmap"
@@ -99,6 +111,11 @@ def baked_materials(context, exported, baked, options: BakeOptions):
     """The exported scene with Cycles' own albedo and emission: probed once per uniform material
     (every face made of one), baked into material maps for the baked objects with any other
     material; and the diffuse factors of their Principled BSDFs for a "light" lightmap's baked look."""
+    return run_steps(baked_materials_steps(context, exported, baked, options))
+
+
+def baked_materials_steps(context, exported, baked, options: BakeOptions):
+    """`baked_materials` a Cycles pass at a time (`prepare_steps`)."""
     scene = exported.scene
     names, face_material = exported.material_names, exported.face_material
     object_of = {name: k for k, name in enumerate(scene.object_names)}
@@ -110,10 +127,14 @@ def baked_materials(context, exported, baked, options: BakeOptions):
         mapped = [obj for obj in baked if object_mapped[object_of[obj.name]]]
         probed = face_uniform & ~object_mapped[scene.object_index]
         probed_codes = np.unique(face_material[probed])
+        yield f"baking {len(probed_codes)} uniform material(s) with Cycles"
         values = uniform_material_values([uniform[names[k]] for k in probed_codes])
         sizes = core.lightmap_sizes(scene, options.lightmaps, [obj.name for obj in mapped]) if mapped else {}
-        maps = bake_material_maps(context, mapped, sizes)
-        factors = principled_diffuse_factors(baked) if options.lightmaps.content == "light" else {}
+        maps = yield from bake_material_maps_steps(context, mapped, sizes)
+        factors = {}
+        if options.lightmaps.content == "light":
+            yield "measuring the Principled BSDFs' diffuse part with Cycles"
+            factors = principled_diffuse_factors(baked)
     except RuntimeError as error:  # Cycles refused (a message of its own)
         raise BakeError(f"Cycles could not bake the materials: {str(error).strip().splitlines()[-1]}") from None
     reflectance, emission = scene.reflectance.copy(), scene.emission.copy()
@@ -191,8 +212,18 @@ def finish(plan: BakePlan) -> str:
 def bake_blocking(context, options: BakeOptions, objects=None, output_dir=None, should_cancel=None,
                   on_progress=None):
     """Scripts, background mode and the command line: the whole bake, waiting for the worker.
-    Returns the finished plan: its summary line, warnings and the solve's report."""
-    plan = prepare(context, options, objects, output_dir)
+    Returns the finished plan: its summary line, warnings and the solve's report. `on_progress`
+    (the bake's BakeClock) is called at each step of the preparation and ten times a second after."""
+    clock = BakeClock()
+    steps = prepare_steps(context, options, objects, output_dir, clock=clock)
+    while True:
+        try:
+            clock.preparing(next(steps))
+        except StopIteration as prepared:
+            plan = prepared.value
+            break
+        if on_progress is not None:
+            on_progress(clock)
     start(plan)
     try:
         while not plan.worker.wait(0.1):

@@ -165,9 +165,24 @@ def _pixels(image) -> np.ndarray:
     return values.reshape(height, width, 4)[..., :3].copy()
 
 
+def run_steps(steps):
+    """What a generator of steps (a bake's preparation, yielding what each next step does) returns,
+    all its steps run at once (scripts, the command line)."""
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+
+
 def bake_material_maps(context, objects, sizes: dict) -> dict:
     """{object name: MaterialMap} for `objects` (each with a 'Lightmap' UV map), at `sizes`
     {object name: (width, height)}."""
+    return run_steps(bake_material_maps_steps(context, objects, sizes))
+
+
+def bake_material_maps_steps(context, objects, sizes: dict):
+    """`bake_material_maps` a Cycles pass at a time: yields what the next pass bakes."""
     objects = [obj for obj in objects if obj.name in sizes]
     if not objects:
         return {}
@@ -178,12 +193,16 @@ def bake_material_maps(context, objects, sizes: dict) -> dict:
     selected, active_object = [o for o in view_layer.objects if o.select_get()], view_layer.objects.active
     try:
         with _cycles_for_baking(context.scene), _default_materials(objects), _original_shading(objects):
-            for group in _bake_groups(objects):
+            groups = _bake_groups(objects)
+            for number, group in enumerate(groups):
                 with _bake_targets(group, images):
                     for obj in view_layer.objects:
                         obj.select_set(obj in group)
                     view_layer.objects.active = group[0]
                     for name, (kind, passes) in PASSES.items():
+                        texels = sum(sizes[obj.name][0] * sizes[obj.name][1] for obj in group)
+                        yield (f"baking {len(group)} object(s)' {name} with Cycles ({texels // 1000}k texels,"
+                               f" {number + 1}/{len(groups)})")
                         with quiet_stdout():
                             bpy.ops.object.bake(type=kind, pass_filter=passes, uv_layer=LIGHTMAP_UV,
                                                 margin=MARGIN, margin_type="EXTEND", use_clear=True)

@@ -8,8 +8,9 @@ import bpy
 
 from ..core import SolveCancelled
 from . import apply, ui_bake
-from .bake import USER_ERRORS, bake_blocking, choose_objects, prepare
+from .bake import USER_ERRORS, bake_blocking, choose_objects, prepare_steps
 from .errors import BakeError
+from .progress import BakeClock
 
 # events that may reach the UI during a modal bake (looking around is fine, editing is not)
 NAVIGATION_EVENTS = {"MIDDLEMOUSE", "WHEELUPMOUSE", "WHEELDOWNMOUSE", "MOUSEMOVE", "INBETWEEN_MOUSEMOVE",
@@ -78,13 +79,13 @@ class RADIOSITY_OT_bake(bpy.types.Operator):
             return self.execute(context)
         try:
             objects = choose_objects(context)
-            plan = prepare(context, context.scene.radiosity.bake_options(objects), objects,
-                           preview_interval=ui_bake.PREVIEW_INTERVAL)
-            self._bake = ui_bake.begin(context, plan)
+            clock = BakeClock()
+            steps = prepare_steps(context, context.scene.radiosity.bake_options(objects), objects,
+                                  preview_interval=ui_bake.PREVIEW_INTERVAL, clock=clock)
+            clock.preparing(next(steps))  # the checks: a refusal is reported at once
+            self._bake = ui_bake.begin_preparing(context, steps, clock)
         except Exception as error:
             return _report_failure(self, error)
-        for line in plan.warnings:
-            self.report({"WARNING"}, line)
         context.window_manager.modal_handler_add(self)
         return {"RUNNING_MODAL"}
 
@@ -93,9 +94,22 @@ class RADIOSITY_OT_bake(bpy.types.Operator):
         if ui_bake.running is not bake:  # interrupted from outside (a file loaded, the add-on disabled)
             return {"CANCELLED"}
         if event.type == "ESC" and event.value == "PRESS":
+            if bake.plan is None:  # still preparing: nothing runs yet to cancel
+                ui_bake.abandon(bake)
+                self.report({"INFO"}, "Radiosity bake: cancelled; nothing was changed")
+                return {"CANCELLED"}
             bake.plan.worker.cancel()
         if event.type == "TIMER":
-            if not ui_bake.advance(bake):
+            preparing = bake.plan is None
+            try:
+                over = ui_bake.advance(bake)
+            except Exception as error:  # a step of the preparation failed, or the solver did not start
+                ui_bake.abandon(bake)
+                return _report_failure(self, error)
+            if preparing and bake.plan is not None:
+                for line in bake.plan.warnings:
+                    self.report({"WARNING"}, line)
+            if not over:
                 return {"RUNNING_MODAL"}
             try:
                 summary = ui_bake.end(bake)

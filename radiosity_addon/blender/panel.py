@@ -40,9 +40,8 @@ def draw_lines(layout, context, text: str, icon: str) -> None:
 
 
 def draw_progress(layout, bake) -> None:
-    worker = bake.plan.worker
-    clock = worker.clock
-    if worker.cancelled:
+    clock = bake.worker_clock
+    if bake.plan is not None and bake.plan.worker.cancelled:
         layout.progress(factor=clock.fraction(), text="Cancelling...")
         return
     layout.progress(factor=clock.fraction(), text=clock.bar_text())

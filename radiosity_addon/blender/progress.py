@@ -2,10 +2,11 @@
 
 bpy-free. The solver's own fraction says little about time (progressive refinement's "1 −
 unshot" is at 65 % after its first shots and creeps through the last 5 %), so the bar shows the
-elapsed share of the estimated total instead: total = elapsed + the solver's estimate of time
-left (or, without one, its fraction extrapolated linearly) + the lightmaps' share, smoothed over
-a few seconds. The first second of a solve is not trusted (progressive refinement's first shots
-carry most of the energy, so its early rate promises far too much).
+elapsed share of the estimated total instead: total = elapsed + the solver process's estimate of
+the job's time left (every stage of the solve and the lightmaps: core.timing.StagePlan; without
+one, its fraction extrapolated linearly), smoothed over a few seconds. The first second of a solve
+is not trusted (a prediction made before the solve has measured this machine). What the bake does
+before its solver starts (the export, Cycles' material bakes) is shown as its stage.
 
 The estimate changes as the solve goes (and as other programs take the CPU), and a bar set to
 elapsed / total would then stop or leap. So the bar moves at the speed that reaches the end when
@@ -18,7 +19,6 @@ from __future__ import annotations
 import math
 import time
 
-LIGHTMAP_SHARE = 0.05  # the lightmap layout takes about this share of the solve's time
 SETTLING = 1.0  # seconds of solving before its estimates count
 SMOOTHING = 3.0  # seconds over which the estimate of the total follows the solver's
 CATCH_UP = 2.0  # seconds in which a bar behind elapsed / total closes the distance
@@ -49,10 +49,10 @@ class BakeClock:
 
     def solving(self, fraction: float, message: str, eta: float | None, now: float | None = None,
                 own_estimate: bool = False) -> None:
-        """A progress report of the solve: fraction in [0, 1], its message, its own time left. A
-        solver with `own_estimate` (progressive refinement) is waited for while its `eta` is None
-        (its emitters shoot first, taking the fraction to ~0.9 in a share of the time that depends
-        on the scene): its fraction is never extrapolated."""
+        """A progress report of the solver process: fraction in [0, 1], its message, the job's time
+        left. A solver with `own_estimate` is waited for while its `eta` is None: its fraction is
+        never extrapolated (progressive refinement's emitters take it to ~0.9 in a share of the time
+        that depends on the scene)."""
         now = time.monotonic() if now is None else now
         if self.solve_started is None:
             self.solve_started = now
@@ -63,18 +63,21 @@ class BakeClock:
         if eta is None and not own_estimate and fraction >= 0.02:
             eta = solve_elapsed * (1.0 - fraction) / fraction
         if eta is not None:
-            self._estimate(now, eta + LIGHTMAP_SHARE * (solve_elapsed + eta))
+            self._estimate(now, eta)
+
+    def preparing(self, stage: str) -> None:
+        """What the bake does before its solver runs (exporting, Cycles' material bakes)."""
+        self.stage = stage
 
     def laying_out_lightmaps(self, now: float | None = None) -> None:
+        """The solve is over; the lightmaps are made (the solver goes on reporting their time left)."""
         now = time.monotonic() if now is None else now
         self.stage = "writing lightmaps"
         self._lightmaps_started = now
-        solve_time = now - (self.solve_started if self.solve_started is not None else self.started)
-        self.total = (now - self.started) + LIGHTMAP_SHARE * solve_time  # the solve's part is known now
 
     def stage_text(self, now: float | None = None) -> str:
-        """The stage, with the seconds the lightmaps have taken so far: their share of the time is a
-        guess (LIGHTMAP_SHARE), and a bar at "finishing" must still show that the bake goes on."""
+        """The stage, with the seconds the lightmaps have taken so far: their time is predicted, and a
+        bar at "finishing" must still show that the bake goes on."""
         if self._lightmaps_started is None or self.done:
             return self.stage
         now = time.monotonic() if now is None else now

@@ -17,6 +17,7 @@ import bpy
 from bpy.app.handlers import persistent
 
 from .bake import BakePlan, finish, rollback, show_preview, start
+from .progress import BakeClock
 from .worker import end_spare
 
 TIMER_INTERVAL = 0.1  # seconds between the modal timer's ticks
@@ -27,12 +28,18 @@ BUSY = "a radiosity bake is running (Esc cancels it)"
 
 @dataclass
 class UIBake:
-    plan: BakePlan
+    plan: BakePlan | None  # None while the bake is being prepared (`steps`)
     window_manager: object
     workspace: object  # its status text
     timer: object  # the modal operator's
     status: str | None = None  # the status text shown; the UI is redrawn only when it changes
     redrawn_at: float = 0.0
+    steps: object = None  # the preparation's steps while they run (bake.prepare_steps)
+    clock: BakeClock | None = None  # the bake's, from the export on (the solver's worker reports to it)
+
+    @property
+    def worker_clock(self) -> BakeClock:
+        return self.clock if self.clock is not None else self.plan.worker.clock
 
 
 running: UIBake | None = None
@@ -62,33 +69,64 @@ def set_status(workspace, text: str | None) -> None:
 
 def begin(context, plan: BakePlan) -> UIBake:
     """Start the solver and the UI's part: the modal timer, progress, status text, the handlers."""
-    global running
     start(plan)
-    window_manager = context.window_manager
-    timer = window_manager.event_timer_add(TIMER_INTERVAL, window=context.window)
-    window_manager.progress_begin(0.0, 1.0)
-    running = UIBake(plan, window_manager, context.workspace, timer)
+    return _begin(context, UIBake(plan, context.window_manager, context.workspace, None))
+
+
+def begin_preparing(context, steps, clock: BakeClock) -> UIBake:
+    """The UI's part of a bake whose preparation (`bake.prepare_steps`) the timer's ticks run a step
+    at a time, then its solver."""
+    return _begin(context, UIBake(None, context.window_manager, context.workspace, None, steps=steps, clock=clock))
+
+
+def _begin(context, bake: UIBake) -> UIBake:
+    global running
+    bake.timer = bake.window_manager.event_timer_add(TIMER_INTERVAL, window=context.window)
+    bake.window_manager.progress_begin(0.0, 1.0)
+    running = bake
     for handlers, handler in HANDLERS:
         if handler not in handlers:
             handlers.append(handler)
-    return running
+    return bake
 
 
 def advance(bake: UIBake) -> bool:
-    """One timer tick: the solver's news, the live preview, progress and status. True once it ended."""
+    """One timer tick: a step of the preparation, or the solver's news, the live preview; progress
+    and status. True once it ended. A step's fault is raised (the operator reports it)."""
+    if bake.plan is None:
+        try:
+            bake.clock.preparing(next(bake.steps))
+        except StopIteration as prepared:
+            bake.plan, bake.steps = prepared.value, None
+            start(bake.plan)
+        _show(bake, bake.clock.status_line(), False)
+        return False
     plan = bake.plan
     over = plan.worker.poll()
     shown = (not over and not plan.worker.cancelled and previews_visible(bake.window_manager)
              and show_preview(plan))
     clock = plan.worker.clock
-    bake.window_manager.progress_update(clock.fraction())
-    status = "Radiosity bake: cancelling..." if plan.worker.cancelled else clock.status_line()
+    _show(bake, "Radiosity bake: cancelling..." if plan.worker.cancelled else clock.status_line(), shown)
+    return over
+
+
+def _show(bake: UIBake, status: str, shown: bool) -> None:
+    bake.window_manager.progress_update(bake.worker_clock.fraction())
     now = time.monotonic()
     if shown or (status != bake.status and now - bake.redrawn_at >= REDRAW_INTERVAL):
         bake.status, bake.redrawn_at = status, now  # the panel shows the same numbers as the status bar
         set_status(bake.workspace, status)
         redraw(bake.window_manager, viewport=shown)
-    return over
+
+
+def abandon(bake: UIBake) -> None:
+    """End a bake whose preparation or solver failed or was cancelled: the UI given back, the
+    preparation closed (it takes back what it added) or the plan rolled back."""
+    release(bake)
+    if bake.plan is None:
+        bake.steps.close()
+    else:
+        rollback(bake.plan)
 
 
 def release(bake: UIBake) -> None:
@@ -125,12 +163,15 @@ def interrupt(why: str, keep_data: bool = True) -> None:
         return
     release(bake)
     try:
-        if keep_data:
+        if bake.plan is None:
+            bake.steps.close()  # the preparation takes back what it added
+        elif keep_data:
             rollback(bake.plan)
     except Exception:  # a bug: say so on the console, but never leave the add-on stuck
         traceback.print_exc()
     finally:
-        bake.plan.worker.discard()
+        if bake.plan is not None:
+            bake.plan.worker.discard()
     print(f"Radiosity bake: cancelled ({why}); nothing was changed")
 
 

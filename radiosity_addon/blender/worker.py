@@ -173,10 +173,10 @@ class BakeWorker:
     discard() ends it and removes its files, whatever state it is in."""
 
     def __init__(self, scene: Scene, settings: SolveSettings, objects: list[str], lightmaps: LightmapSettings,
-                 preview_interval: float | None = None):
+                 preview_interval: float | None = None, clock: BakeClock | None = None):
         self.scene, self.settings, self.objects, self.lightmaps = scene, settings, objects, lightmaps
         self.preview_interval = preview_interval  # seconds between previews; None: none (scripts)
-        self.clock = BakeClock()
+        self.clock = clock if clock is not None else BakeClock()  # a bake's runs from its export on
         self.result: SolveResult | None = None
         self.error: BaseException | None = None
         self.cancelled = False

@@ -37,7 +37,8 @@ solve(scene, settings=None, progress=None, should_cancel=None, gpu=None, preview
                    max_shots; visibility, visibility_res, kernel, shoot_from (progressive);
                    memory_limit_bytes (the hemi-cube matrix guard); skip_unneeded (simulate
                    only the effects the scene analysis finds).
-    progress       progress(fraction in [0, 1], message, details dict), called as it goes.
+    progress       progress(fraction in [0, 1], message, details dict), called as it goes (every
+                   stage reports; details["eta"]: the solve's seconds left, details["stage"]).
     should_cancel  should_cancel() -> True stops the solve with SolveCancelled.
     gpu            a GPU to run on (its program cache is reused); None: a context of its own,
                    released afterwards. Every GL object a solve makes is released when it
@@ -54,7 +55,7 @@ Solution               patches, patch_radiosity (P, 3), element_radiosity (P, S,
 
 Lightmaps and preview
 ---------------------
-bake_lightmaps(scene, solution, settings=None, gpu=None, objects=None) -> {object name: Lightmap}
+bake_lightmaps(scene, solution, settings=None, gpu=None, objects=None, progress=None) -> {object name: Lightmap}
     settings       LightmapSettings: texel_density (texels per scene unit), max_size,
                    resolution_overrides {object: side or (w, h)}, power_of_two, gutter, and
                    content: "light" (default) — the light H arriving, B = E + ρH, shown as
@@ -66,6 +67,7 @@ Lightmap               levels (RGBA float32 mip chain, alpha = coverage), filled
                        renderers that build their own mipmaps), surfaces and their surface_uv.
 lightmap_sizes(scene, settings=None, objects=None) -> {object: (width, height)}
                        the sizes bake_lightmaps will use (e.g. to bake material maps first).
+lightmap_seconds(scene, sizes) -> seconds    about how long bake_lightmaps takes for those sizes.
 render_preview(scene, lightmaps, camera=None, width=512, height=512, supersample=2, gpu=None)
     -> Preview         the scene from `camera` (default: the scene's own, else one that frames
                        it), lit only by the lightmaps, trilinearly filtered.
@@ -91,7 +93,7 @@ from .errors import USER_ERRORS, GLUnavailable, SceneError, SolveCancelled, Solv
 from .gpu import GPU, open_gpu
 from .hemicube import form_factor_matrix, point_to_polygon, solve_linear
 from .hemicube.linear_solvers import Convergence
-from .lightmap import Lightmap, bake_lightmaps, lightmap_sizes
+from .lightmap import Lightmap, bake_lightmaps, lightmap_seconds, lightmap_sizes
 from .preview import Camera, Preview, render_preview, save_preview
 from .report import Report
 from .scene.geometry import bilinear
@@ -110,7 +112,7 @@ __all__ = [
     "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "QUALITIES", "QUALITY_PRESETS", "SOLVE_METHODS", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
     "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "StageTimer", "Surface", "TEXEL_DENSITY",
     "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",
-    "form_factor_matrix", "lightmap_sizes", "polygon_faults",
+    "form_factor_matrix", "lightmap_seconds", "lightmap_sizes", "polygon_faults",
     "load_scene", "open_gpu", "point_to_polygon", "render_preview", "save_preview", "save_scene",
     "scene_from_dict", "solve", "solve_linear", "subdivide", "surfaces_with_material_maps",
 ]

@@ -134,3 +134,36 @@ def choose_method(patches: Patches, settings: SolveSettings, shooters: int | Non
     reason = (f"{len(patches)} patches: predicted {predictions[chosen].seconds:.2g} s against"
               f" {predictions[other].seconds:.2g} s for the {other} method")
     return MethodChoice(chosen, reason, table)
+
+
+# the solve's other stages, for the time-left estimate (timing.StagePlan), measured on the production
+# terrace (bench/production.py) at 50k and 300k triangles, 2 cores, llvmpipe: seconds per face for the
+# faces' material means, clustering and the analysis; per patch probed and per surface in each of the
+# sky's direction maps for a refinement round; per patch for a method before it is chosen
+STAGE_SECONDS = {"materials": 1.5e-6, "cluster": 1.5e-5, "analyse": 6.5e-6, "refine_patch": 4e-4,
+                 "sky_surface": 5e-7, "method_patch": 1.5e-3}
+REFINED_SHARE = 0.3  # of the patches a refinement round after the first probes again (those it split)
+
+
+def predicted_patches(scene, settings: SolveSettings) -> int:
+    """The patches a solve will have, guessed before its faces are clustered: a patch per
+    patch-sized piece of the surfaces, no more than faces (times four for the rounds' splits)."""
+    if settings.subdiv is not None:
+        return len(scene) * settings.subdiv ** 2
+    return int(min(len(scene), 2 * float(scene.area.sum()) / settings.patch_size ** 2 + 16))
+
+
+def stage_predictions(scene, settings: SolveSettings, patches: int, surfaces: int | None = None) -> dict:
+    """Predicted seconds of a solve's stages for `scene` (its faces) and about `patches` patches on
+    `surfaces` surfaces (default: as many as patches)."""
+    faces = len(scene)
+    surfaces = patches if surfaces is None else surfaces
+    sky = STAGE_SECONDS["sky_surface"] * surfaces * 1024 if np.any(scene.world_color > 0) else 0.0
+    rounds = settings.refinements
+    refine = (STAGE_SECONDS["refine_patch"] * patches * (1 + REFINED_SHARE * max(rounds - 1, 0)) + rounds * sky
+              if rounds else 0.0)
+    predicted = {"cluster": STAGE_SECONDS["cluster"] * faces, "analyse": STAGE_SECONDS["analyse"] * faces,
+                 "refine": refine, "method": STAGE_SECONDS["method_patch"] * patches + sky}
+    if scene.material_maps:
+        predicted["materials"] = STAGE_SECONDS["materials"] * faces
+    return predicted

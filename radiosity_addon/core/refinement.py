@@ -175,7 +175,7 @@ def unchanged_patches(before: Patches, after: Patches) -> np.ndarray:
 
 
 def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
-           budget: int | None = None) -> tuple[Patches, list[int], MeasuredDirectLight | None]:
+           budget: int | None = None, progress=None) -> tuple[Patches, list[int], MeasuredDirectLight | None]:
     """`patches` split where the direct light changes fast, how many were split per round, and the
     direct light the last round measured, on the patches it left alone (None without rounds);
     never more than `budget` patches in all (the hemi-cube method's matrices must fit). The splits
@@ -183,7 +183,7 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
     REFINE_MIN_PATCHES), largest first, so refinement grows linearly with the scene; the gap rule's
     splits (at emitters) come first and are not counted. Each round probes only the patches the
     last one made (`unchanged_patches`), unless the emitters' shots changed (a textured emitter
-    split)."""
+    split). `progress(fraction, message)` after each round."""
     elements = max(settings.elements, PROBE_ELEMENTS)
     spread_room = max(int(settings.refine_budget * len(patches)), REFINE_MIN_PATCHES)
     refined = []
@@ -212,6 +212,8 @@ def refine(gpu, scene, patches: Patches, backs, settings, effects, timer,
                 break
             refined.append(int(split.sum()))
             before, patches = patches, split_patches(patches, split, backs, cuts)
+            if progress is not None:
+                progress((level + 1) / settings.refinements, f"refinement round {level + 1}: {len(patches)} patches")
             light_of = unchanged_patches(before, patches)
             if scene.material_maps:
                 patches.reflectance, patches.emission = patch_material_values(gpu, scene, patches)

@@ -14,7 +14,7 @@ import numpy as np
 from .gpu import GPU, open_gpu
 from .hemicube import solve_hemicube
 from .hemicube.form_factors import check_memory, patch_budget
-from .method_choice import choose_method
+from .method_choice import choose_method, predicted_patches, stage_predictions
 from .progressive import solve_progressive
 from .report import Counts, Report
 from .scene import Scene, check_has_emitter, effects_for, subdivide
@@ -24,7 +24,7 @@ from .settings import SolveSettings
 from .shooting import element_areas, patch_means
 from .solution import Solution
 from .refinement import refine
-from .timing import ProgressCallback, StageTimer
+from .timing import ProgressCallback, StagePlan, StageTimer
 from .uvspace import patch_material_values, surfaces_with_material_maps
 
 
@@ -38,20 +38,24 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
         check_has_emitter(scene)
     started = time.perf_counter()
     timer = timer if timer is not None else StageTimer()
+    plan = StagePlan(progress, stage_predictions(scene, settings, predicted_patches(scene, settings)))
     with open_gpu(gpu) as solve_gpu:
         if scene.material_maps:  # textured materials: surfaces and patches take their texels' means
-            with timer.stage("materials"):
+            with plan.stage("materials", "reading the material maps"), timer.stage("materials"):
                 scene = surfaces_with_material_maps(solve_gpu, scene, scene.material_maps)
             check_has_emitter(scene)
         faces = scene
-        with timer.stage("cluster"):  # small faces into patch-sized clusters: the solve's surfaces
-            clusters = cluster_faces(faces, settings.patch_size, settings.subdiv)
+        with plan.stage("cluster", f"clustering {len(faces)} faces"), timer.stage("cluster"):
+            clusters = cluster_faces(faces, settings.patch_size, settings.subdiv)  # the solve's surfaces
         scene = clusters.proxies
-        with timer.stage("analyse"):
+        with plan.stage("analyse", "analysing the scene"), timer.stage("analyse"):
             backs = clusters.proxy_backs(simulated_backs(faces, settings.skip_unneeded))
             effects, backs = effects_for(scene, settings.skip_unneeded, backs)
         with timer.stage("subdivide"):
             patches = subdivide(scene, settings.subdiv, settings.patch_size, backs)
+        for name, seconds in stage_predictions(faces, settings, len(patches), len(scene)).items():
+            if name in ("refine", "method"):
+                plan.predict(name, seconds)
         if scene.material_maps:
             with timer.stage("materials"):
                 patches.reflectance, patches.emission = patch_material_values(solve_gpu, scene, patches)
@@ -59,13 +63,18 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
         if settings.method == "hemicube":  # refuse before any GPU work; refinement stays within the matrices' memory
             check_memory(len(patches), settings.memory_limit_bytes, settings.hemicube_elements)
             budget = patch_budget(settings.memory_limit_bytes, settings.hemicube_elements)
-        patches, refined, measured = refine(solve_gpu, scene, patches, backs, settings, effects, timer, budget)
-        choice = None
-        if settings.method == "auto":
-            choice = choose_method(patches, settings)
+        with plan.stage("refine", f"refining {len(patches)} patches"):
+            patches, refined, measured = refine(solve_gpu, scene, patches, backs, settings, effects, timer, budget,
+                                                plan.within())
+        choice = choose_method(patches, settings)  # each method's predicted time: the estimate's, and auto's choice
+        asked_auto = settings.method == "auto"
+        if asked_auto:
             settings = replace(settings, method=choice.method)
-        result = _solve_patches(solve_gpu, scene, patches, settings, effects, timer, progress, should_cancel,
-                                preview, preview_interval, measured, clusters)
+        plan.predict("method", choice.predicted[settings.method]["seconds"])
+        choice = choice if asked_auto else None
+        with plan.stage("method", f"solving {len(patches)} patches ({settings.method})"):
+            result = _solve_patches(solve_gpu, scene, patches, settings, effects, timer, plan.within(),
+                                    should_cancel, preview, preview_interval, measured, clusters)
     radiosity, elements, light, element_light, direct, element_direct, details = result
     timer.timings["total"] = time.perf_counter() - started
     element_count = len(patches) * elements.shape[1] ** 2

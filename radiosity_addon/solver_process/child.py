@@ -111,9 +111,10 @@ def one_line(error: BaseException) -> str:
     return text.splitlines()[0]
 
 
-def lightmap_images(scene, solution, objects: list[str], settings, gpu) -> dict:
+def lightmap_images(scene, solution, objects: list[str], settings, gpu, progress=None) -> dict:
     """object name -> float32 (H, W, 4) linear RGBA, alpha = coverage, for `objects` only."""
-    lightmaps = core.bake_lightmaps(scene, solution, settings, gpu=gpu, objects=list(objects))  # occluders get none
+    lightmaps = core.bake_lightmaps(scene, solution, settings, gpu=gpu, objects=list(objects),  # occluders get none
+                                    progress=progress)
     missing = [name for name in objects if name not in lightmaps]
     if missing:
         raise core.SolveError(f"object '{missing[0]}': no lightmap was produced")
@@ -127,16 +128,20 @@ class Solve:
         self.directory, self.pipe, self.gpu = directory, pipe, gpu
         self.last_progress = 0.0
         self.previews = 0
+        self.lightmap_seconds = 0.0  # predicted for the lightmaps, after the solve
 
-    def progress(self, fraction, message, details=None) -> None:
+    def progress(self, fraction, message, details=None, after: float = 0.0) -> None:
+        """A stage's report (core.timing.StagePlan): its "eta" the solve's or the lightmaps' time left,
+        plus `after` seconds predicted for what follows: the job's time left, what the bar shows."""
         now = time.monotonic()
         if now - self.last_progress >= PROGRESS_INTERVAL or fraction >= 1.0:
             self.last_progress = now
             eta = (details or {}).get("eta")
-            # a solver that estimates its own time left (progressive refinement) says so even while
-            # it has no estimate yet: its fraction is not linear in time and must not be extrapolated
             self.pipe.send("progress", fraction=float(fraction), message=str(message),
-                           eta=None if eta is None else float(eta), own_estimate="eta" in (details or {}))
+                           eta=None if eta is None else float(eta) + after, own_estimate=True)
+
+    def solving(self, fraction, message, details=None) -> None:
+        self.progress(fraction, message, details, after=self.lightmap_seconds)
 
     def preview(self, scene, settings, objects, gpu):
         def show(snapshot) -> None:
@@ -150,14 +155,15 @@ class Solve:
 
     def run(self) -> None:
         scene, solve_settings, lightmap_settings, objects, preview_interval = protocol.read_job(self.directory)
+        self.lightmap_seconds = core.lightmap_seconds(scene, core.lightmap_sizes(scene, lightmap_settings, objects))
         own = self.gpu or core.GPU()
         with own, core.open_gpu(own) as gpu:
             preview = (self.preview(scene, lightmap_settings, objects, gpu)
                        if preview_interval and solve_settings.method != "hemicube" else None)
-            solution = core.solve(scene, solve_settings, progress=self.progress, gpu=gpu, preview=preview,
+            solution = core.solve(scene, solve_settings, progress=self.solving, gpu=gpu, preview=preview,
                                   preview_interval=preview_interval or 2.0)
             self.pipe.send("stage", name="lightmaps")
-            images = lightmap_images(scene, solution, objects, lightmap_settings, gpu)
+            images = lightmap_images(scene, solution, objects, lightmap_settings, gpu, progress=self.progress)
             # the result before the context's release: the parent takes it and ends this process
             protocol.save_images(self.directory / protocol.RESULT_FILE, images)
             report = solution.report

@@ -62,14 +62,20 @@ uniform int hemicube_resolution;
 uniform int hemicube_tiles_per_row;
 uniform int item_resolution;
 
+// a visibility map's item for the back of a patch whose back is not simulated (its id + 1 with this
+// bit): no receiver is on it, but it hides what lies behind it
+const uint BACK_OF = 0x80000000u;
+
 bool on_plane(uint item, int plane) {
-    return item != 0u && int(item) - 1 < plane_of.length() && plane_of[int(item) - 1].id.x == plane;
+    return item != 0u && (item & BACK_OF) == 0u && int(item) - 1 < plane_of.length()
+        && plane_of[int(item) - 1].id.x == plane;
 }
 
 // Does the patch `item` (seen where the receiver should be) lie between the eye and the receiver
 // (eye + d) along that ray? Then the receiver is hidden and no search may look past it: searching
 // neighbour pixels would find the floor beside a box's foot and light the floor in its shadow.
-bool hides(uint item, vec3 eye, vec3 d) {
+bool hides(uint shown, vec3 eye, vec3 d) {
+    uint item = shown & ~BACK_OF;
     if (item == 0u || int(item) - 1 >= plane_of.length()) {
         return false;  // the sky, or a patch's back column: a rasterization gap, search
     }

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..timing import pulse
+
 from ..errors import SolveCancelled, SolveError
 from ..gpu import GPU
 from ..scene import Patches
@@ -50,6 +52,7 @@ def form_factor_matrix(gpu: GPU, patches: Patches, resolution: int, scene_diamet
     with gpu.resources() as res:
         renderer = HemicubeRenderer(res, patches, resolution, scene_diameter)
         for first in range(0, len(rows), renderer.slots):
+            pulse()
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
             batch = rows[first:first + renderer.slots]
@@ -82,6 +85,7 @@ def element_form_factors(gpu: GPU, patches: Patches, elements: int, resolution: 
         step = max(1, (1 << 26) // (len(patches) * 4 * 3 * 8 * 6))
         owner = np.repeat(rows, elements * elements)
         for first in range(0, count, step):
+            pulse()
             chosen = slice(first, first + step)
             block = point_to_polygon(frames[0][chosen], frames[3][chosen], patches.corners)
             block[np.arange(len(block)), owner[chosen]] = 0.0  # a planar patch cannot see itself
@@ -90,6 +94,7 @@ def element_form_factors(gpu: GPU, patches: Patches, elements: int, resolution: 
     with gpu.resources() as res:
         renderer = HemicubeRenderer(res, patches, resolution, scene_diameter, used_slots=count)
         for first in range(0, count, renderer.slots):
+            pulse()
             if should_cancel is not None and should_cancel():
                 raise SolveCancelled("cancelled")
             batch = tuple(v[first:first + renderer.slots] for v in frames)

@@ -24,6 +24,7 @@ from ..errors import SolveCancelled
 from ..gpu import GPU
 from ..scene import Patches, Scene, SceneEffects
 from ..settings import SolveSettings
+from ..shooting.sky import SKY_DIRECTIONS
 from ..shooting import (DirectLightWork, MeasuredDirectLight, direct_light_at_elements, element_areas,
                         lamps_as_shooters, patch_means, patch_scale_shots, same_shots)
 from ..timing import StageTimer, scaled_progress
@@ -116,7 +117,7 @@ def direct_light(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettin
     areas = element_areas(patches, size * k)
     lamp_shots = len(lamps_as_shooters(scene, settings.probe_pieces))
     work = DirectLightWork(lamps=len(scene.lamps), lamp_visibility_maps=lamp_shots if effects.occlusion else 0,
-                           sky_hemicubes=len(patches) * (size * k) ** 2 if np.any(scene.world_color > 0) else 0,
+                           sky_maps=SKY_DIRECTIONS if np.any(scene.world_color > 0) else 0,
                            emitter_pieces=len(shots) - lamp_shots)
     return element_means(light, areas, size), element_means(sky, areas, size), work
 

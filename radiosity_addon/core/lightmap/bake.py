@@ -26,17 +26,19 @@ from ..errors import SceneError, SolveError
 from ..gpu import GPU, open_gpu
 from ..scene import Scene
 from ..scene.face_clusters import identity_clusters
+from ..scene.geometry import bilinear
 from ..settings import LightmapSettings
 from ..solution import Solution
+from ..timing import StagePlan, pulse
 from ..shooting.sky import element_frames
 from ..uvspace import rasterize
 from . import charts
-from .contact import in_contact
+from .contact import in_contact, touching_clusters
 from .direct import (direct_light, emitters_reflected_light, emitters_reflection, footprint_points,
                      matched_map_resolution, sharp_texels, texel_axes, texel_points)
-from .lattice import continuous_lattice, element_values
+from .lattice import continuous_lattice, element_values, lattice_parameters
 from .mips import filled_image, mip_levels
-from .scattered import element_samples, scattered_values
+from .scattered import corner_values, element_samples
 from .size import resolve_size
 
 UV_TOLERANCE = 1e-3  # how far given UVs may stray outside [0, 1]
@@ -160,7 +162,7 @@ class ObjectTexels:
     unit_of_texel: np.ndarray  # (H, W) its unit, -1 where none covers it
     covered: np.ndarray  # (H, W) bool
     axes: np.ndarray  # (U, 3, 2) each unit's world step per texel along x and y
-    nearest_patch: np.ndarray | None = None  # (H, W) on clustered faces the patch whose elements weigh most
+    nearest_patch: np.ndarray | None = None  # (H, W) on clustered faces the patch whose elements weigh most at a corner
 
     def texel_faces(self) -> np.ndarray:
         """(covered texels,) the face each covered texel shows."""
@@ -171,12 +173,30 @@ class ObjectTexels:
         return self.unit_patch[self.unit_of_texel[self.covered]]
 
 
+LIGHTMAP_SECONDS = {"texel": 1.5e-6, "face": 1.2e-5}  # measured on the production terrace (2 cores, llvmpipe)
+
+
+def predicted_seconds(scene: Scene, sizes: dict) -> float:
+    """About how long `bake_lightmaps` takes for lightmaps of `sizes` ({object: (w, h)}): its cost
+    follows their texels (direct light per texel) and the faces laid out and drawn."""
+    texels = sum(width * height for width, height in sizes.values())
+    return LIGHTMAP_SECONDS["texel"] * texels + LIGHTMAP_SECONDS["face"] * len(scene)
+
+
 def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings | None = None,
-                   gpu: GPU | None = None, objects=None) -> dict[str, Lightmap]:
+                   gpu: GPU | None = None, objects=None, progress=None) -> dict[str, Lightmap]:
     """One `Lightmap` per object of `scene` (or of `objects`, names of some of them: objects
-    that only occlude need none), keyed by object name (see core/__init__.py)."""
+    that only occlude need none), keyed by object name (see core/__init__.py); `progress` as a
+    solve's (its details' "eta": seconds left)."""
     settings = settings or LightmapSettings()
     layouts = plan_layouts(scene, settings, objects)
+    plan = StagePlan(progress, {"lightmaps": predicted_seconds(scene, layouts.sizes)})
+    with plan.stage("lightmaps", f"laying out {len(layouts.objects)} lightmap(s)"):
+        return _bake(scene, solution, settings, gpu, layouts)
+
+
+def _bake(scene: Scene, solution: Solution, settings: LightmapSettings, gpu: GPU | None,
+          layouts: "Layouts") -> dict[str, Lightmap]:
     objects, object_of_surface, surface_uv = layouts.objects, layouts.object_of_surface, layouts.surface_uv
     clusters = solution.clusters if solution.clusters is not None else identity_clusters(scene)
     faces = clusters.faces if len(clusters.faces) == len(scene) else scene
@@ -231,6 +251,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     texels = {}
     with open_gpu(gpu) as lightmap_gpu:
         for number, (name, indices) in enumerate(objects.items()):
+            pulse()
             size = layouts.sizes[name]
             mine = np.flatnonzero(group == number)
             loose = indices[clustered[indices]]
@@ -238,7 +259,17 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
             unit_face = np.concatenate([face_of_patch[mine], loose])
             unit_corners = np.concatenate([patches.corners[mine], scene.corners[loose]])
             corners_texels = np.concatenate([patch_uv[mine], surface_uv[loose]]) * np.asarray(size, dtype=np.float64)
-            unit_lattice = np.concatenate([lattice[mine], np.zeros((len(loose),) + lattice.shape[1:])])
+            unit_lattice = lattice[mine]
+            hint = None
+            if len(loose):  # clustered faces: the elements' light around their corners, laid in between
+                object_index = solved.object_names.index(name)
+                rows = np.flatnonzero((sample_object == object_index) & ~patches.is_back)
+                at_corners, nearest = corner_values(scene.corners[loose], faces.normal[loose],
+                                                    element_samples(patches, values, rows), scene_size)
+                params = lattice_parameters(values.shape[1])
+                s_grid, t_grid = np.meshgrid(params, params)
+                unit_lattice = np.concatenate([unit_lattice, bilinear(at_corners, s_grid, t_grid)])
+                hint = np.concatenate([np.full(len(mine), -1), nearest[:, 0]])
             texel_values, signed_ids = rasterize(lightmap_gpu, corners_texels, unit_lattice, size)
             if not (signed_ids != 0).any():
                 raise SolveError(f"object '{name}': its faces cover no texel of a {size[0]}x{size[1]}"
@@ -247,19 +278,12 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
             entry = ObjectTexels(values=texel_values.astype(np.float64), signed_ids=signed_ids, unit_face=unit_face,
                                  unit_patch=unit_patch, positions=positions, unit_of_texel=unit_of_texel, covered=covered,
                                  axes=texel_axes(unit_corners, corners_texels))
-            if len(loose):  # texels of clustered faces: the elements' values around them
-                on_loose = covered & (unit_patch[np.maximum(unit_of_texel, 0)] < 0)
-                object_index = solved.object_names.index(name)
-                rows = np.flatnonzero((sample_object == object_index) & ~patches.is_back)
-                found, nearest = scattered_values(positions[on_loose], faces.normal[unit_face[unit_of_texel[on_loose]]],
-                                                  element_samples(patches, values, rows))
-                entry.values[on_loose] = found
-                entry.nearest_patch = np.full(unit_of_texel.shape, -1, dtype=np.int64)
-                entry.nearest_patch[on_loose] = nearest
+            if hint is not None:
+                entry.nearest_patch = np.where(covered, hint[np.maximum(unit_of_texel, 0)], -1)
             texels[name] = entry
         if per_texel:
             add_direct_light(lightmap_gpu, solution, clusters, faces, texels, settings, reflected)
-        clear_contacts(faces, texels, holds_b=_holds_b(mapped, faces, scene) if not (per_texel or light) else None)
+        clear_contacts(faces, texels, _holds_b(mapped, faces, scene) if not (per_texel or light) else None, clusters)
     lightmaps = {}
     for name, entry in texels.items():
         size, indices = layouts.sizes[name], objects[name]
@@ -306,11 +330,11 @@ def covered_texels(texels: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, li
     return points, faces, patches, [int(entry.covered.sum()) for entry in entries]
 
 
-def clear_contacts(faces: Scene, texels: dict, holds_b) -> None:
+def clear_contacts(faces: Scene, texels: dict, holds_b, clusters=None) -> None:
     """Texels under a face touching theirs see nothing (`contact`): their light H becomes 0, and
     B = E where a texel holds the interpolated B (`holds_b`: per patch and per face; None: nowhere)."""
     points, face, patch, counts = covered_texels(texels)
-    touched = in_contact(faces, points, face)
+    touched = in_contact(faces, points, face, None if clusters is None else touching_clusters(clusters))
     cleared = np.zeros((len(face), 3))
     if holds_b is not None:
         by_patch, by_face = holds_b

@@ -6,7 +6,9 @@ without this test it would take its patch's interpolated light (a leak through t
 Touching faces are found among nearby faces (`scene.neighbours.near_pairs`, linear in the scene):
 fronts facing each other (normals opposite within PARALLEL) on one plane (within
 CONTACT_DISTANCE of the scene's diameter: an emitter hung 2 cm under a ceiling does not touch it).
-A texel is in contact when its point lies inside such a partner's polygon."""
+A texel is in contact when its point lies inside such a partner's polygon. Faces the solve took in
+clusters are searched only where their clusters' rectangles touch (`touching_clusters`): a dense
+mesh's faces are many, and few of them rest on anything."""
 
 from __future__ import annotations
 
@@ -20,16 +22,36 @@ PARALLEL = 0.999  # -cos between the normals of two faces that touch face to fac
 POINT_CHUNK = 1 << 20  # (texel, partner) tests at once
 
 
-def touching_faces(scene: Scene, surfaces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+NORMAL_CELLS = 20  # normals are binned on a grid this fine: a face can touch only faces in the cells around its opposite
+
+
+def _facing_somewhere(normals: np.ndarray) -> np.ndarray:
+    """(n,) bool: some face's normal lies in the bins around each face's opposite normal (a dense
+    mesh's faces mostly have none: only they are searched for partners)."""
+    cells = np.rint(normals * NORMAL_CELLS).astype(np.int64)
+    code = lambda c: ((c[:, 0] + 64) * 256 + (c[:, 1] + 64)) * 256 + (c[:, 2] + 64)  # noqa: E731
+    present = np.unique(code(cells))
+    found = np.zeros(len(normals), dtype=bool)
+    for offset in np.stack(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1], indexing="ij"), -1).reshape(-1, 3):
+        found |= np.isin(code(-cells + offset), present)
+    return found
+
+
+def touching_faces(scene: Scene, surfaces: np.ndarray, candidates: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(surface, partner) pairs: `surfaces` (some of the scene's) and the faces touching their
-    fronts face to face."""
+    fronts face to face, among `candidates` (a mask of faces; None: all)."""
     corners = scene.corners
     centre = corners.mean(axis=1)
     radius = np.linalg.norm(corners - centre[:, None], axis=2).max(axis=1)
     tolerance = CONTACT_DISTANCE * scene.diameter
     normal = scene.normal
+    facing = _facing_somewhere(normal)
+    if candidates is not None:
+        facing &= candidates
+    surfaces = surfaces[facing[surfaces]]
     found_surface, found_partner = [], []
-    for query, other in near_pairs(centre, radius + tolerance, surfaces, radius[surfaces] + tolerance):
+    for query, other in near_pairs(centre, radius + tolerance, surfaces, radius[surfaces] + tolerance,
+                                   others=np.flatnonzero(facing)):
         surface = surfaces[query]
         facing = np.einsum("ij,ij->i", normal[surface], normal[other]) < -PARALLEL
         apart = np.abs(np.einsum("ij,ij->i", corners[other, 0] - corners[surface, 0], normal[surface]))
@@ -55,13 +77,13 @@ def inside_polygons(points: np.ndarray, corners: np.ndarray, normals: np.ndarray
     return inside
 
 
-def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray) -> np.ndarray:
+def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray, candidates: np.ndarray | None = None) -> np.ndarray:
     """(N,) whether each point (N, 3), lying on the front of its surface `surfaces` (N,), is
-    covered by a face touching that front."""
+    covered by a face touching that front (faces among `candidates`, a mask; None: all)."""
     covered = np.zeros(len(points), dtype=bool)
     if len(points) == 0:
         return covered
-    touched, partner = touching_faces(scene, np.unique(surfaces))
+    touched, partner = touching_faces(scene, np.unique(surfaces), candidates)
     if len(touched) == 0:
         return covered
     # each surface's points sorted along one axis in its plane (its longest), so that a partner
@@ -90,3 +112,15 @@ def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray) -> np.nda
         hit = inside_polygons(points[point], scene.corners[partner[pair]], scene.normal[partner[pair]], tolerance)
         covered[point[hit]] = True
     return covered
+
+
+def touching_clusters(clusters) -> np.ndarray | None:
+    """(F,) the faces whose cluster's rectangle touches another's (scene.face_clusters; a face the
+    solve took as it is, its own), the only ones that may touch; None where nothing was clustered."""
+    if clusters.is_identity:
+        return None
+    proxies = clusters.proxies
+    surface, partner = touching_faces(proxies, np.arange(len(proxies)))
+    touching = np.zeros(len(proxies), dtype=bool)
+    touching[surface] = touching[partner] = True
+    return touching[clusters.proxy_of_face]

@@ -1,14 +1,16 @@
-"""The solve's smooth light at texels of clustered faces: a weighted mean of nearby element values.
+"""The solve's smooth light on clustered faces: a weighted mean of nearby element values at their
+corners, laid over their texels by the rasterizer (linear over each face).
 
 A face the solve took as part of a cluster (`scene.face_clusters`) has no patches of its own: its
 cluster was solved as a rectangle that covers the faces only roughly (a curved cluster bulges off
 it, neighbouring rectangles leave slivers between them), so the patch lattices, continuous across
-the edges patches share, cannot be laid onto its texels. Each texel instead takes the mean of the
-element values around its point, of its object only: every element centre is a sample reaching
+the edges patches share, cannot be laid onto its texels. Each face corner instead takes the mean of
+the element values around its point, of its object only (a face's texels then cost nothing more than
+its rasterization): every element centre is a sample reaching
 SUPPORT times its element's half-diagonal, weighted (1 - d²/r²)², and by how far its normal turns
 from the texel's (none past NORMAL_LIMIT_DEGREES: the other side of a thin object or of a crease).
 The weights fall to zero at a sample's reach, so the light is continuous across clusters and
-their faces; a texel that no sample reaches (a face bulging far off its cluster) takes the nearest
+their faces; a corner that no sample reaches (a face bulging far off its cluster) takes the nearest
 sample's value.
 """
 
@@ -21,6 +23,7 @@ import numpy as np
 from ..scene import Patches
 from ..scene.geometry import bilinear
 from ..scene.neighbours import near_pairs
+from ..scene.rows import row_labels
 from ..shooting.elements import element_parameters
 
 SUPPORT = 2.0  # a sample's reach in half-diagonals of its element: 2 reaches the ring of elements around it
@@ -98,3 +101,21 @@ def _nearest(points: np.ndarray, centres: np.ndarray) -> np.ndarray:
         distance = (np.square(part[:, None] - centres[None])).sum(axis=2)
         found[first:first + len(part)] = np.argmin(distance, axis=1)
     return found
+
+
+NORMAL_BINS = 4  # corners share a value where their faces' normals round alike at this many steps per unit
+
+
+def corner_values(corners: np.ndarray, normals: np.ndarray, samples, scene_size: float):
+    """(n, 4, 3) `scattered_values` at the corners (n, 4, 3) of faces with `normals` (n, 3), and
+    (n, 4) the heaviest sample's patch at each: a point of a mesh is asked once for the faces whose
+    normals agree there (a smooth surface's ~6 triangles at a vertex), apart across a crease."""
+    count = len(corners)
+    points = corners.reshape(-1, 3)
+    facing = np.repeat(normals, 4, axis=0)
+    keys = np.concatenate([np.rint(points / (1e-6 * scene_size)), np.rint(facing * NORMAL_BINS)], axis=1)
+    inverse = row_labels(keys.astype(np.int64))
+    first = np.zeros(int(inverse.max()) + 1, dtype=np.int64)
+    first[inverse[::-1]] = np.arange(len(inverse))[::-1]
+    values, nearest = scattered_values(points[first], facing[first], samples)
+    return values[inverse].reshape(count, 4, 3), nearest[inverse].reshape(count, 4)

@@ -8,7 +8,8 @@ lightmaps are made of (their texels are the receivers of the direct light, and t
 what that light's visibility rasterizes); only the solve sees proxies.
 
 How faces are grouped (all vectorized, O(F log F)):
-1. Candidates: faces whose longest edge is under MERGE_SIZE of the patch size.
+1. Candidates: faces whose longest edge is under the patch size (a larger face is split into patches
+   of its own).
 2. Regions: candidates of one object and one kind (two-sidedness, emission, opacity texture)
    joined across shared edges (corners welded like `topology`) where they bend less than
    CREASE_DEGREES: a subdivided box gives six regions, a smooth or noisy sculpt one.
@@ -37,7 +38,7 @@ from .model import Scene
 from .rows import row_labels
 from .topology import QUANTUM, _labels
 
-MERGE_SIZE = 0.25  # faces whose longest edge is under this fraction of the patch size may be merged
+MERGE_SIZE = 1.0  # faces whose longest edge is under this fraction of the patch size may be merged
 CREASE_DEGREES = 60.0  # adjacent faces bent further apart than this belong to different regions
 COHERENCE = 0.95  # |sum a n| / sum a under this (a spherical cap wider than ~50 degrees): a cluster is bent
 FLATNESS = 0.05  # ... when its corners also stray from its plane by more than this fraction of its width
@@ -46,7 +47,7 @@ UV_QUANTUM = 1e-6  # texture UVs closer than this are the same
 SIZE_SLACK = 1.0 + 1e-6  # a cluster this close to the patch size is not cut
 MAX_ROUNDS = 64
 ABSORB_DEGREES = 60.0  # a speck joins a neighbouring cluster whose normal is within this of its own
-ABSORB_ROUNDS = 4
+ABSORB_ROUNDS = 32
 
 
 @dataclass(eq=False)
@@ -287,8 +288,9 @@ def _pieces(scene: Scene, faces: np.ndarray, label: np.ndarray, patch_size: floa
 
 def _absorb_small(scene: Scene, faces: np.ndarray, label: np.ndarray, pairs: np.ndarray, patch_size: float) -> np.ndarray:
     """Clusters smaller than MIN_BENT_SIZE² of the patch size's square (specks a rough surface's
-    creases cut off) joined to the adjacent larger cluster whose normal agrees best (within
-    ABSORB_DEGREES), a few rounds, so a rough surface keeps about as many clusters as a smooth one."""
+    creases cut off) joined to an adjacent larger cluster, the one whose normal agrees best (within
+    ABSORB_DEGREES), round by round until none is left that can join one: a rough surface keeps
+    about as many clusters as a smooth one."""
     if len(pairs) == 0:
         return label
     small_area = (MIN_BENT_SIZE * patch_size) ** 2
@@ -296,17 +298,15 @@ def _absorb_small(scene: Scene, faces: np.ndarray, label: np.ndarray, pairs: np.
     area, normal = scene.area[faces], scene.normal[faces]
     for _ in range(ABSORB_ROUNDS):
         stats = _ClusterStats(area, normal, label)
-        small = stats.area < small_area
         a, b = label[pairs[:, 0]], label[pairs[:, 1]]
         across = a != b
         a, b = np.concatenate([a[across], b[across]]), np.concatenate([b[across], a[across]])
-        take = small[a] & ~small[b]
-        a, b = a[take], b[take]
-        if len(a) == 0:
-            return label
+        # a small cluster joins a larger one (ties: the lower label), so no two join each other
+        bigger = (stats.area[b] > stats.area[a]) | ((stats.area[b] == stats.area[a]) & (b < a))
+        take = (stats.area[a] < small_area) & bigger
         score = np.einsum("nd,nd->n", stats.normal[a], stats.normal[b])
-        good = score > limit
-        a, b, score = a[good], b[good], score[good]
+        take &= score > limit
+        a, b, score = a[take], b[take], score[take]
         if len(a) == 0:
             return label
         order = np.lexsort((-score, a))
@@ -314,6 +314,11 @@ def _absorb_small(scene: Scene, faces: np.ndarray, label: np.ndarray, pairs: np.
         first[1:] = a[order][1:] != a[order][:-1]
         target = np.arange(stats.count)
         target[a[order][first]] = b[order][first]
+        while True:  # a cluster joining one that joins another goes where that one goes
+            onward = target[target]
+            if np.array_equal(onward, target):
+                break
+            target = onward
         label = _compact(target[label])
     return label
 

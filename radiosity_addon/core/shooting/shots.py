@@ -15,6 +15,7 @@ import hashlib
 import numpy as np
 
 from ..gpu import Resources, texture_unit, uniform_block
+from ..timing import pulse
 from ..scene import Patches, Scene, surface_patches
 from ..visibility import VARIANTS, DrawnFaces, HemicubeAtlas, VisibilityMap
 from .shooters import DIRECTIONAL, SKY, Shooter
@@ -98,6 +99,7 @@ def shoot_in_batches(shoot, visibility: "ShotVisibility", shooters: list[Shooter
     batches = visibility.batches(shooters)
     for batch in batches:
         shoot(batch)
+        pulse()
     return len(batches)
 
 

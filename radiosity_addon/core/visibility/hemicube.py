@@ -18,7 +18,8 @@ from ..gpu import FORM_FACTOR_ONE, MAX_WORK_GROUPS, Resources, render_indirect, 
 from ..scene import Patches
 from ..scene.geometry import tangent_frames
 from .face_culling import COMMAND_WORDS, draw_commands, triangle_clusters
-from .item_geometry import DrawnFaces, item_geometry, vertex_format
+from .drawn_faces import DrawnFaces
+from .item_geometry import item_geometry, vertex_format
 from .opacity import OpacityAtlas
 from .opacity import defines as opacity_defines
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from ..gpu import Resources, render, texture_unit
 from ..scene import Patches
-from .item_geometry import DrawnFaces
+from .drawn_faces import DrawnFaces
 from .opacity import OpacityAtlas
 from .opacity import defines as opacity_defines
 

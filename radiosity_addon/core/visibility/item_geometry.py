@@ -26,9 +26,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import OpacityMaps, Patches
+from ..scene import Patches
 from ..scene.geometry import area_vector, bilinear_each
 from ..scene.neighbours import expanded_ranges
+from .drawn_faces import DrawnFaces
 
 EMPTY_CELL = 0xFFFFFFFF  # a table cell no patch covers (nothing is drawn there)
 PARALLELOGRAM = 1e-6  # of a surface's size: c0 + c2 - c1 - c3 longer than this and it is no parallelogram
@@ -58,25 +59,13 @@ VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("
 def vertex_format(lookup: bool, opacity: bool) -> tuple[str, list[str]]:
     """The vertex rows' format and attribute names for an item-buffer shader with or without the
     patch lookup (`(s, t)` and the unit's record) and the opacity test (texture UVs and rectangle)."""
-    fields = "3f 3f 1u 1i " + ("2f 4u 4u 4u 4f" if lookup else "72x") + (" 2f 4i" if opacity else " 24x")
-    names = ["in_position", "in_normal", "in_patch", "in_twin"]
+    # a patch and its twin in one attribute: with the lookup, the opacity and the five faces' instance
+    # attributes, a shader reads 16, what OpenGL guarantees
+    fields = "3f 3f 2i " + ("2f 4u 4u 4u 4f" if lookup else "72x") + (" 2f 4i" if opacity else " 24x")
+    names = ["in_position", "in_normal", "in_item"]
     names += ["in_st", "in_cuts", "in_bins", "in_table", "in_ef"] if lookup else []
     names += ["in_opacity_uv", "in_opacity_rect"] if opacity else []
     return fields, names
-
-
-@dataclass
-class DrawnFaces:
-    """Polygons an item buffer draws for some front patches instead of their own quads: the faces a
-    cluster's rectangle stands for (`scene.face_clusters`), so what is seen has the faces' own shape
-    and the rectangle's id."""
-    corners: np.ndarray  # (n, 4, 3) counter-clockwise from the front, triangles repeating their last corner
-    patch: np.ndarray  # (n,) the front patch each is drawn for
-    opacity: OpacityMaps | None = None  # their opacity textures (None: all opaque)
-
-    @property
-    def is_triangle(self) -> np.ndarray:
-        return np.all(self.corners[:, 3] == self.corners[:, 2], axis=1)
 
 
 @dataclass
