@@ -85,7 +85,11 @@ void main() {
         uint patch_id = table[unit_table.x + j * (unit_cuts.y - 1u) + i];
         if (patch_id == EMPTY_CELL) discard;
         out_item = seen_from_front != 0u ? patch_id + 1u
+#if BACKS_HIDE
+                 : (twin[patch_id] >= 0 ? uint(twin[patch_id]) + 1u : (patch_id + 1u) | 0x80000000u);
+#else
                  : (twin[patch_id] >= 0 ? uint(twin[patch_id]) + 1u : back_item);
+#endif
     }
 #endif
     gl_FragDepth = clamp(log(view_depth / near) / log(far / near), 0.0, 1.0);

@@ -90,5 +90,11 @@ void main() {
     unit_ef = in_ef;
     surface_st = in_st;
 #endif
-    item = front ? uint(in_item.x) + 1u : (in_item.y >= 0 ? uint(in_item.y) + 1u : back_item);
+#if BACKS_HIDE
+    // a lookup's buffer: an unsimulated back is its id with the BACK_OF bit (include/shot.glsl): it hides
+    uint unsimulated_back = (uint(in_item.x) + 1u) | 0x80000000u;
+#else
+    uint unsimulated_back = back_item;  // the form factors' last column
+#endif
+    item = front ? uint(in_item.x) + 1u : (in_item.y >= 0 ? uint(in_item.y) + 1u : unsimulated_back);
 }

@@ -156,7 +156,7 @@ def test_looked_up_item_buffers_show_the_patches_drawn_one_by_one(gpu, monkeypat
     drawn = {}
     for face_pixels in (0, None):  # patch by patch, then every surface that can be looked up
         monkeypatch.setattr(hemicube, "item_geometry",
-                            lambda p, face_pixels=None, drawn=None, forced=face_pixels: items.item_geometry(p, forced, drawn))
+                            lambda p, face_pixels=None, forced=face_pixels: items.item_geometry(p, forced))
         with gpu.resources() as res:
             atlas = hemicube.HemicubeAtlas(res, patches, resolution, scene.diameter, max_slots=len(rows))
             assert (atlas.looked_up_surfaces > 0) == (face_pixels is None)

@@ -42,6 +42,7 @@ LEAF_SIZE = 0.35  # a leaf card's side, metres
 MAX_CANOPY_CARDS = 3000  # beyond, the canopy's share of the triangles goes to the other pieces' detail
 MAX_PLANT_CARDS = 400
 TILE_REPEAT = 2.5  # metres of floor per repeat of the tile image
+FLOOR_GAP = 0.002  # metres between the floor and what stands on it
 # each piece's share of the triangles (the floor, walls and furniture carry most, as in real scenes)
 SHARES = {"floor": 0.22, "walls": 0.16, "sofa": 0.15, "boulder": 0.15, "table": 0.11, "shelf": 0.08,
           "pergola": 0.06, "canopy": 0.04, "plant": 0.03}
@@ -199,7 +200,14 @@ def _pieces(triangles: int, materials: dict, seed: int) -> list:
     normals = np.column_stack([np.cos(around), np.sin(around), rng.uniform(0.3, 1.2, leaves)])
     vertices, triangles_, uv = shapes.cards(centres, normals, np.tile([0, 0, 1.0], (leaves, 1)), LEAF_SIZE * 0.8)
     pieces.append(("Plant", "leaf", vertices, triangles_, None, uv))
-    return pieces
+    # what stands on the floor stands a hair above it: faces coinciding with the floor's plane are a
+    # coin toss for any renderer (Cycles sees the sky through them), not a test of the light
+    lifted = []
+    for name, key, vertices, triangles_, face_materials, uv in pieces:
+        if name not in ("Floor", "Walls"):
+            vertices = vertices + [0.0, 0.0, FLOOR_GAP]
+        lifted.append((name, key, vertices, triangles_, face_materials, uv))
+    return lifted
 
 
 def array_mesh(name: str, vertices: np.ndarray, triangles: np.ndarray, materials, face_materials=None, uv=None):

@@ -16,8 +16,8 @@ import numpy as np
 
 from ..gpu import Resources, texture_unit, uniform_block
 from ..timing import pulse
-from ..scene import Patches, Scene, surface_patches
-from ..visibility import VARIANTS, DrawnFaces, HemicubeAtlas, VisibilityMap
+from ..scene import Patches, Scene, subdivide, surface_patches
+from ..visibility import VARIANTS, HemicubeAtlas, VisibilityMap
 from .shooters import DIRECTIONAL, SKY, Shooter
 
 MAX_SHOTS = 64  # records per uniform block: 64 x (176 + 64) bytes, within GL's 16 KiB guarantee
@@ -75,15 +75,15 @@ def shot_records(shooters: list[Shooter], slots: list[int]) -> np.ndarray:
     return np.concatenate([records.reshape(-1, 4), corners.reshape(-1, 4)])
 
 
-def patch_planes(patches: Patches, cluster_of: np.ndarray | None = None) -> bytes:
+def patch_planes(patches: Patches, cluster_of: np.ndarray | None = None, planes: np.ndarray | None = None) -> bytes:
     """shot.glsl's PatchPlane per patch: its plane's equation (n, n . x) as float32, its plane id
-    (patches of one side of a surface are coplanar: a visibility lookup accepts any of them) and
-    its shooter clusters (`cluster_of` (P, levels ≤ 7), finest first, -1 without), its four corners
-    (a triangle repeats its last)."""
+    (patches of one side of a surface are coplanar: a visibility lookup accepts any of them;
+    `planes` (P,) instead of `patches.plane`) and its shooter clusters (`cluster_of` (P, levels ≤ 7),
+    finest first, -1 without), its four corners (a triangle repeats its last)."""
     equation = np.concatenate([patches.normal, np.einsum("pd,pd->p", patches.normal, patches.center)[:, None]],
                               axis=1).astype(np.float32)
     ids = np.full((len(patches), 8), -1, dtype=np.int32)  # id, coarser_id
-    ids[:, 0] = patches.plane
+    ids[:, 0] = patches.plane if planes is None else planes
     if cluster_of is not None:
         cluster_of = np.asarray(cluster_of).reshape(len(patches), -1)
         if cluster_of.shape[1] > 7:
@@ -116,11 +116,11 @@ class ShotVisibility:
 
     def __init__(self, res: Resources, patches: Patches, resolution: int, variant: str, scene_diameter: float,
                  occlusion: bool = True, capacity: int = MAX_SHOTS, kept_as: tuple | None = None,
-                 skip_of: np.ndarray | None = None, drawn: DrawnFaces | None = None):
-        """The item buffers show `patches` (some as the faces `drawn` for them); `kept_as` (a key naming
-        them, e.g. `surface_visibility`'s): the atlas and the map are the GPU's kept ones for it
-        (`GPU.kept`), not this scope's; `skip_of`: a shooter's patch -> the item a map leaves out for it
-        (`patches.drawn`)."""
+                 skip_of: np.ndarray | None = None, item_planes: np.ndarray | None = None):
+        """The item buffers show `patches`; `kept_as` (a key naming them, e.g. `surface_visibility`'s):
+        the atlas and the map are the GPU's kept ones for it (`GPU.kept`), not this scope's; `skip_of`:
+        a shooter's patch -> the item a map leaves out for it (`patches.drawn`; -1: none);
+        `item_planes`: the plane each item is a point of for a lookup (None: `patches.plane`)."""
         self.res, self.patches, self.resolution, self.occlusion = res, patches, resolution, occlusion
         self.variant, self.diameter = VARIANTS[variant], scene_diameter
         self.name = variant
@@ -128,14 +128,14 @@ class ShotVisibility:
         self.skip_of = patches.drawn if skip_of is None else skip_of
         self.atlas = None
         self._map = None
-        self.drawn = drawn
+        self.item_planes = item_planes
         if self.variant.hemicube:
             self.capacity = min(capacity, MAX_SHOTS)
             if occlusion:
                 self.atlas = self._own_or_kept(
                     ("atlas", hemicube_resolution(resolution), self.capacity),
                     lambda scope: HemicubeAtlas(scope, patches, hemicube_resolution(resolution), scene_diameter,
-                                                max_slots=self.capacity, drawn=drawn))
+                                                max_slots=self.capacity, backs_hide=True))
                 self.capacity = min(self.capacity, self.atlas.slots)
         else:
             self.capacity = 1
@@ -150,7 +150,7 @@ class ShotVisibility:
             variant = "plain" if self.variant.hemicube else self.name  # a sun's map needs no tessellation
             self._map = self._own_or_kept(
                 ("map", variant, self.resolution),
-                lambda scope: VisibilityMap(scope, self.patches, self.resolution, variant, self.diameter, self.drawn))
+                lambda scope: VisibilityMap(scope, self.patches, self.resolution, variant, self.diameter))
         return self._map
 
     def _own_or_kept(self, what: tuple, make):
@@ -229,23 +229,22 @@ def surface_visibility(res: Resources, scene: Scene, patches: Patches, resolutio
     however finely refinement split them, and they are the same for every split: kept on the GPU
     for the job (`GPU.kept`), and not drawn again for the same shots (the emitters' pieces of every
     refinement round, the direct light and the lightmaps at one resolution). With `clusters`
-    (`scene.face_clusters`, whose proxies `scene` holds) a cluster's rectangle is drawn as its faces:
-    what the lightmaps' texels see has the faces' own shape, and any face of a texel's cluster is seen
-    as its plane."""
-    surfaces = surface_patches(scene, patches)
+    (`scene.face_clusters`, whose proxies `scene` holds) the items are the faces themselves, each a
+    point of its cluster's plane: what the lightmaps' texels see has the faces' own shape and
+    outlines, and any face of a texel's cluster is seen as its plane."""
+    planes = skip_of = None
+    if clusters is not None and not clusters.is_identity:
+        surfaces = subdivide(clusters.faces, subdiv=1)
+        planes = clusters.proxy_of_face
+        skip_of = clusters.face_of_proxy[np.asarray(patches.surface)]  # a cluster's piece leaves nothing out
+    else:
+        surfaces = surface_patches(scene, patches)
+        skip_of = np.asarray(patches.surface)  # item k is surface k's front
     digest = hashlib.sha1(np.ascontiguousarray(surfaces.corners).tobytes())
     digest.update(np.ascontiguousarray(surfaces.twin).tobytes())
+    if planes is not None:
+        digest.update(np.ascontiguousarray(planes).tobytes())
     if surfaces.opacity is not None:
         digest.update(surfaces.opacity.digest())
-    drawn = None
-    if clusters is not None and not clusters.is_identity:
-        faces = np.flatnonzero(clusters.merged[clusters.proxy_of_face])
-        opacity = clusters.faces.opacity
-        drawn = DrawnFaces(corners=clusters.faces.corners[faces], patch=clusters.proxy_of_face[faces],
-                           opacity=None if opacity is None else opacity.rows(faces))
-        digest.update(np.ascontiguousarray(drawn.corners).tobytes())
-        if drawn.opacity is not None:
-            digest.update(drawn.opacity.digest())
-    # a shooter's patch leaves out its surface: item k is surface k's front
     return ShotVisibility(res, surfaces, resolution, variant, scene.diameter, occlusion, capacity,
-                          kept_as=("surfaces", digest.hexdigest()), skip_of=np.asarray(patches.surface), drawn=drawn)
+                          kept_as=("surfaces", digest.hexdigest()), skip_of=skip_of, item_planes=planes)

@@ -28,7 +28,7 @@ class TexelReceivers:
             "TEXEL_NORMAL": res.buffer(vec4(normals).tobytes()),
             "TEXEL_PLANE": res.buffer(np.asarray(planes, dtype=np.int32).tobytes()),
             "TEXEL_LIGHT": res.buffer(np.zeros((self.count, 4), dtype=np.float32).tobytes()),
-            "PATCH_PLANE": res.buffer(patch_planes(visibility.patches)),  # what the item buffers show
+            "PATCH_PLANE": res.buffer(patch_planes(visibility.patches, planes=visibility.item_planes)),  # what the items show
         }
         self.columns, self.columns_filled = columns, 0
         if columns:

@@ -2,7 +2,6 @@
 
 from .hemicube import HemicubeAtlas, HemicubeRenderer, delta_form_factors, fixed_point_weights, patch_frames
 from .hemisphere import VARIANTS, Variant, VisibilityMap
-from .drawn_faces import DrawnFaces
 
-__all__ = ["DrawnFaces", "HemicubeAtlas", "HemicubeRenderer", "VARIANTS", "Variant", "VisibilityMap", "delta_form_factors",
+__all__ = ["HemicubeAtlas", "HemicubeRenderer", "VARIANTS", "Variant", "VisibilityMap", "delta_form_factors",
            "fixed_point_weights", "patch_frames"]

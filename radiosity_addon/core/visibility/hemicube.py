@@ -18,7 +18,6 @@ from ..gpu import FORM_FACTOR_ONE, MAX_WORK_GROUPS, Resources, render_indirect, 
 from ..scene import Patches
 from ..scene.geometry import tangent_frames
 from .face_culling import COMMAND_WORDS, draw_commands, triangle_clusters
-from .drawn_faces import DrawnFaces
 from .item_geometry import item_geometry, vertex_format
 from .opacity import OpacityAtlas
 from .opacity import defines as opacity_defines
@@ -98,7 +97,10 @@ class HemicubeAtlas:
     id + 1, or `back_item` where the back is not simulated; 0: nothing)."""
 
     def __init__(self, res: Resources, patches: Patches, resolution: int, scene_diameter: float,
-                 max_slots: int | None = None, used_slots: int | None = None, drawn: DrawnFaces | None = None):
+                 max_slots: int | None = None, used_slots: int | None = None, backs_hide: bool = False):
+        """`backs_hide`: an item buffer for lookups (not form factors): the back of a patch whose back
+        is not simulated shows as its id with the BACK_OF bit (include/shot.glsl), so it hides what is
+        behind it (a face inside a closed mesh)."""
         ctx = res.ctx
         self.ctx = ctx
         self.patches = patches
@@ -120,16 +122,17 @@ class HemicubeAtlas:
         target = (self.atlas_size[0], min(self.atlas_size[1], -(-self.slots // self.tiles_per_row) * 3 * resolution))
         self.row_length = self.patch_count + 1  # the last column: backs of patches
 
-        geometry = item_geometry(patches, face_pixels=resolution * resolution * 3 // 5, drawn=drawn)
+        geometry = item_geometry(patches, face_pixels=resolution * resolution * 3 // 5)
         self.looked_up_surfaces = geometry.looked_up
         looked_up = geometry.looked_up > 0  # else a shader without the lookup (its varyings cost fill)
         textured = geometry.opacity_index is not None and bool((geometry.opacity_index >= 0).any())
         self.opacity = None
         if textured:  # alpha-cut surfaces: their fragments go where the texture's alpha is under the cutoff
-            self.opacity = OpacityAtlas(res, patches.opacity if patches.opacity is not None else drawn.opacity)
+            self.opacity = OpacityAtlas(res, patches.opacity)
             geometry.vertices["opacity_rect"] = self.opacity.vertex_rects(geometry.opacity_index)
         self.program = res.gpu.program("hemicube_item_buffer.vert", "hemicube_item_buffer.frag",
-                                       defines={"LOOKUP": int(looked_up), **opacity_defines(textured)})
+                                       defines={"LOOKUP": int(looked_up), "BACKS_HIDE": int(backs_hide),
+                                                **opacity_defines(textured)})
         self.uniforms = {"near": NEAR * scene_diameter, "far": 4.0 * scene_diameter, "back_item": self.row_length}
         self.clusters = triangle_clusters(geometry.vertices["p"], geometry.indices)
         self.vertex_buffer = res.buffer(geometry.vertices.tobytes())
@@ -174,7 +177,8 @@ class HemicubeAtlas:
         instances = face_instances(hemicube_frames, self.resolution, self.tiles_per_row, self.atlas_size)
         self.instance_buffer.write(instances.tobytes())
         for name, value in self.uniforms.items():
-            self.program[name] = value
+            if self.program.get(name, None) is not None:  # a variant may not read one (BACKS_HIDE: back_item)
+                self.program[name] = value
         for name, buffer in self.lookup_buffers.items():
             buffer.bind_to_storage_buffer(storage(name))
         if self.opacity is not None:

@@ -28,7 +28,6 @@ import numpy as np
 
 from ..gpu import Resources, render, texture_unit
 from ..scene import Patches
-from .drawn_faces import DrawnFaces
 from .opacity import OpacityAtlas
 from .opacity import defines as opacity_defines
 
@@ -64,9 +63,7 @@ VARIANTS = {
 class VisibilityMap:
     """A resolution x resolution item buffer of all patches, seen from a point."""
 
-    def __init__(self, res: Resources, patches: Patches, resolution: int, variant: str, scene_diameter: float,
-                 drawn: DrawnFaces | None = None):
-        """`drawn`: faces drawn for some patches instead of their quads (`item_geometry.DrawnFaces`)."""
+    def __init__(self, res: Resources, patches: Patches, resolution: int, variant: str, scene_diameter: float):
         if variant not in VARIANTS:
             raise ValueError(f"unknown visibility variant '{variant}' (choose {', '.join(VARIANTS)})")
         ctx = res.ctx
@@ -76,17 +73,9 @@ class VisibilityMap:
         self.scene_diameter = scene_diameter
         count = patches.front_count  # a back is drawn as its front seen from behind (its twin id)
         corners, ids = patches.corners[:count], np.arange(count)
-        maps = patches.opacity if patches.opacity is not None else (drawn.opacity if drawn is not None else None)
-        opacity_index = patches.opacity.index[:count] if patches.opacity is not None else np.full(count, -1)
-        opacity_uv = patches.opacity.uv[:count] if patches.opacity is not None else np.zeros((count, 4, 2))
-        if drawn is not None and len(drawn.patch):
-            own = ~np.isin(ids, drawn.patch)
-            corners, ids = np.concatenate([corners[own], drawn.corners]), np.concatenate([ids[own], drawn.patch])
-            opaque = drawn.opacity is None
-            opacity_index = np.concatenate([opacity_index[own], np.full(len(drawn.patch), -1) if opaque
-                                            else drawn.opacity.index])
-            opacity_uv = np.concatenate([opacity_uv[own], np.zeros((len(drawn.patch), 4, 2)) if opaque
-                                         else drawn.opacity.uv])
+        maps = patches.opacity
+        opacity_index = maps.index[:count] if maps is not None else np.full(count, -1)
+        opacity_uv = maps.uv[:count] if maps is not None else np.zeros((count, 4, 2))
         textured = maps is not None and bool((opacity_index >= 0).any())
         self.program = self._link(res.gpu, self.variant.tessellation, textured)
         vertices = np.empty(len(ids) * 4, dtype=[("p", "f4", 3), ("id", "u4"), ("twin", "i4"),

@@ -29,7 +29,6 @@ import numpy as np
 from ..scene import Patches
 from ..scene.geometry import area_vector, bilinear_each
 from ..scene.neighbours import expanded_ranges
-from .drawn_faces import DrawnFaces
 
 EMPTY_CELL = 0xFFFFFFFF  # a table cell no patch covers (nothing is drawn there)
 PARALLELOGRAM = 1e-6  # of a surface's size: c0 + c2 - c1 - c3 longer than this and it is no parallelogram
@@ -89,13 +88,12 @@ class ItemGeometry:
         return len(self.surfaces)
 
 
-def item_geometry(patches: Patches, face_pixels: int | None = None, drawn: DrawnFaces | None = None) -> ItemGeometry:
+def item_geometry(patches: Patches, face_pixels: int | None = None) -> ItemGeometry:
     """The item-buffer geometry of `patches`' fronts: looked-up units drawn once, the rest patch by
     patch. With `face_pixels` (the pixels of one face of the maps drawn), units are looked up only
-    where that saves time (LOOKUP_PIXELS_PER_TRIANGLE); with 0 never. `drawn`: faces drawn for some
-    patches instead of their quads (those patches are never looked up)."""
+    where that saves time (LOOKUP_PIXELS_PER_TRIANGLE); with 0 never."""
     count = patches.front_count
-    lookup = _lookup_units(patches, None if drawn is None else drawn.patch) if face_pixels != 0 else None
+    lookup = _lookup_units(patches) if face_pixels != 0 else None
     if lookup is not None and face_pixels is not None:
         replaced = np.isin(lookup["unit_of"], lookup["units"])
         unit_triangles = int(np.where(lookup["skewed"] == TRIANGLE_MAP, 1, 2).sum())
@@ -103,7 +101,7 @@ def item_geometry(patches: Patches, face_pixels: int | None = None, drawn: Drawn
         if saved < LOOKUP_PIXELS_PER_TRIANGLE * face_pixels:
             lookup = None
     direct = np.ones(count, dtype=bool) if lookup is None else ~np.isin(lookup["unit_of"], lookup["units"])
-    vertices, indices, opacity_index = _patch_geometry(patches, np.flatnonzero(direct), drawn)
+    vertices, indices, opacity_index = _patch_geometry(patches, np.flatnonzero(direct))
     twins = patches.twin[:count].astype(np.int32)
     if lookup is None:
         empty = np.zeros((0, RECORD, 4), dtype=np.uint32)
@@ -117,27 +115,15 @@ def item_geometry(patches: Patches, face_pixels: int | None = None, drawn: Drawn
                         lookup["records"], lookup["cuts"], lookup["bins"], lookup["table"], twins, opacity_index)
 
 
-def _patch_geometry(patches: Patches, rows: np.ndarray, drawn: DrawnFaces | None = None):
-    """Vertices and triangles of the front patches `rows` (or of the faces `drawn` for them), and each
-    vertex's opacity texture (None: the patches have none): a back patch is drawn as its front seen
-    from behind (the twin id), so coincident sides never fight over depth."""
+def _patch_geometry(patches: Patches, rows: np.ndarray):
+    """Vertices and triangles of the front patches `rows`, and each vertex's opacity texture (None: the
+    patches have none): a back patch is drawn as its front seen from behind (the twin id), so
+    coincident sides never fight over depth."""
     corners, normals, ids = patches.corners[rows], patches.normal[rows], rows
     is_triangle = patches.is_triangle[rows]
-    textured = patches.opacity is not None or (drawn is not None and drawn.opacity is not None)
-    opacity_index = patches.opacity.index[rows] if patches.opacity is not None else np.full(len(rows), -1)
-    opacity_uv = patches.opacity.uv[rows] if patches.opacity is not None else np.zeros((len(rows), 4, 2))
-    if drawn is not None and len(drawn.patch):
-        own = ~np.isin(rows, drawn.patch)
-        area = area_vector(drawn.corners)
-        corners = np.concatenate([corners[own], drawn.corners])
-        normals = np.concatenate([normals[own], area / np.linalg.norm(area, axis=1, keepdims=True)])
-        ids = np.concatenate([rows[own], drawn.patch])
-        is_triangle = np.concatenate([is_triangle[own], drawn.is_triangle])
-        opaque = drawn.opacity is None
-        opacity_index = np.concatenate([opacity_index[own], np.full(len(drawn.patch), -1) if opaque
-                                        else drawn.opacity.index])
-        opacity_uv = np.concatenate([opacity_uv[own], np.zeros((len(drawn.patch), 4, 2)) if opaque
-                                     else drawn.opacity.uv])
+    textured = patches.opacity is not None
+    opacity_index = patches.opacity.index[rows] if textured else np.full(len(rows), -1)
+    opacity_uv = patches.opacity.uv[rows] if textured else np.zeros((len(rows), 4, 2))
     count = len(ids)
     vertices = np.empty(count * 4, dtype=VERTEX_DTYPE)
     vertices["p"] = corners.reshape(-1, 3)
@@ -219,9 +205,8 @@ def _units(patches: Patches):
     return unit_of.ravel(), unit_corners, is_grid_triangle
 
 
-def _lookup_units(patches: Patches, drawn_for: np.ndarray | None = None) -> dict | None:
-    """The units drawn once with a patch table (`_units`), and their records, cuts and tables (None:
-    none can be). Patches `drawn_for` (drawn as faces of their own) keep their units out."""
+def _lookup_units(patches: Patches) -> dict | None:
+    """The units drawn once with a patch table (`_units`), and their records, cuts and tables (None: none can be)."""
     count = patches.front_count
     if patches.surface_corners is None or count == 0:
         return None
@@ -233,8 +218,6 @@ def _lookup_units(patches: Patches, drawn_for: np.ndarray | None = None) -> dict
     known = np.isfinite(params).all(axis=(1, 2))
     if patches.opacity is not None:  # an alpha-cut surface is drawn patch by patch, with its texture UVs
         known[np.isin(surface, surface[patches.opacity.index[:count] >= 0])] = False
-    if drawn_for is not None and len(drawn_for):
-        known[np.isin(surface, surface[drawn_for[drawn_for < count]])] = False
     candidate = (per_surface >= 2) & (np.bincount(surface, weights=~known, minlength=surfaces) == 0)
     candidate &= np.where(is_grid_triangle, np.linalg.norm(area_vector(corners), axis=1) > 0, _flat_convex_quad(corners))
     # the patches must be where their rectangles say (the bilinear map of the unit at their corners)
