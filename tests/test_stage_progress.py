@@ -63,5 +63,5 @@ def test_every_stage_of_a_dense_scenes_solve_and_lightmaps_reports(gpu):
     bake_lightmaps(scene, solution, settings, gpu=gpu,
                    progress=lambda fraction, message, details: lightmap_reports.append(details))
     assert lightmap_reports and all(details["stage"] == "lightmaps" for details in lightmap_reports)
-    assert lightmap_reports[0]["eta"] == pytest.approx(lightmap_seconds(scene, lightmap_sizes(scene, settings)))
+    assert lightmap_reports[0]["eta"] == pytest.approx(lightmap_seconds(scene, lightmap_sizes(scene, settings), settings))
     assert np.isfinite(lightmap_reports[0]["eta"]) and lightmap_reports[0]["eta"] > 0

@@ -44,8 +44,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
+from mathutils import Vector  # noqa: E402
 
-from radiosity_addon.bench import blend_lightmaps, blend_reference, compare  # noqa: E402
+from radiosity_addon.bench import blend_lightmaps, blend_reference, compare, foliage  # noqa: E402
+from radiosity_addon.bench.production import PRODUCTION_PROPERTY  # noqa: E402
 from radiosity_addon.bench.rooms import ROOM_PROPERTY  # noqa: E402
 from radiosity_addon.blender import worker  # noqa: E402
 from radiosity_addon.blender.headless import HeadlessBake, bake_file, ensure_registered  # noqa: E402
@@ -54,6 +56,16 @@ from radiosity_addon.blender.lightmap_uv import add_lightmap_uvs  # noqa: E402
 
 def log(message: str) -> None:
     print(f"[{time.strftime('%H:%M:%S')}] {message}", file=sys.stderr, flush=True)
+
+
+def canopy_shadow(positions: dict):
+    """The floor's texels under the canopy as the sun sees them (bench/foliage.py), where the open
+    file is a production terrace with a sun; else None."""
+    suns = [obj for obj in bpy.context.scene.objects if obj.type == "LIGHT" and obj.data.type == "SUN"]
+    if PRODUCTION_PROPERTY not in bpy.context.scene or not suns or foliage.FLOOR not in positions:
+        return None
+    towards_sun = np.array(suns[0].matrix_world.to_3x3() @ Vector((0.0, 0.0, 1.0)))
+    return foliage.canopy_shadow(positions[foliage.FLOOR], towards_sun / np.linalg.norm(towards_sun))
 
 
 def with_lightmap_uvs(source: Path, target: Path) -> tuple[Path, bool]:
@@ -269,6 +281,13 @@ def main() -> int:
         print(f"| {entry['label']} | {entry['method']} | {entry.get('patches', '')} | {entry['seconds']:.1f} "
               f"| {100 * entry['texel_rms']:.1f} % / {100 * entry['texel_rms_inside']:.1f} % "
               f"| {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) | {worst} {100 * error:+.0f} % |", flush=True)
+    shadow = canopy_shadow(positions)
+    if shadow is not None:  # the production terrace: the dappled floor under the canopy
+        for entry, images in rows:
+            entry["foliage"] = foliage.foliage_numbers(images[foliage.FLOOR], reference["images"][foliage.FLOOR], shadow)
+            print(f"foliage, {entry['label']}: the canopy's shadow on the floor ({entry['foliage']['texels']} texels)"
+                  f" {100 * (entry['foliage']['shadow_mean_ratio'] - 1):+.1f} % in its mean,"
+                  f" {100 * entry['foliage']['pattern_rms']:.1f} % texel RMS")
     print_cycles_equivalents(record, args.target_error)
     if args.densities:
         record["densities"] = density_sweep(path, json.loads(args.runs[0]), args.cycles[0], args.densities, out)

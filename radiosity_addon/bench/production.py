@@ -43,6 +43,7 @@ MAX_CANOPY_CARDS = 3000  # beyond, the canopy's share of the triangles goes to t
 MAX_PLANT_CARDS = 400
 TILE_REPEAT = 2.5  # metres of floor per repeat of the tile image
 FLOOR_GAP = 0.002  # metres between the floor and what stands on it
+CANOPY_LOW, CANOPY_HIGH = (-2.6, -2.0, 2.55), (0.8, 1.4, 3.05)  # the box the canopy's leaf cards are centred in
 # each piece's share of the triangles (the floor, walls and furniture carry most, as in real scenes)
 SHARES = {"floor": 0.22, "walls": 0.16, "sofa": 0.15, "boulder": 0.15, "table": 0.11, "shelf": 0.08,
           "pergola": 0.06, "canopy": 0.04, "plant": 0.03}
@@ -182,8 +183,7 @@ def _pieces(triangles: int, materials: dict, seed: int) -> list:
     pergola += [shapes.rounded_box([x, -0.3, 2.65], [0.12, 3.4, 0.1], 0.02, k) for x in (-2.4, 0.6)]
     pieces.append(("Pergola", "metal", *shapes.merge(*pergola), None, None))
     leaves = int(np.clip(share["canopy"] / 2, 40, MAX_CANOPY_CARDS))
-    centres = np.column_stack([rng.uniform(-2.6, 0.8, leaves), rng.uniform(-2.0, 1.4, leaves),
-                               rng.uniform(2.55, 3.05, leaves)])
+    centres = np.column_stack([rng.uniform(low, high, leaves) for low, high in zip(CANOPY_LOW, CANOPY_HIGH)])
     normals = np.column_stack([rng.normal(0, 0.35, leaves), rng.normal(0, 0.35, leaves), np.ones(leaves)])
     ups = rng.normal(size=(leaves, 3))
     vertices, triangles_, uv = shapes.cards(centres, normals, ups, LEAF_SIZE)

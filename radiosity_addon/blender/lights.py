@@ -97,7 +97,7 @@ class LightReader:
         elif light.type == "SUN":
             if not getattr(light, "normalize", True) and light.angle > 0:
                 energy *= math.pi * math.sin(light.angle / 2) ** 2  # Cycles: strength per disk of the sky
-            entry.update(direction=as_list(direction), strength=energy)
+            entry.update(direction=as_list(direction), strength=energy, angle=float(light.angle))
         elif light.type == "AREA":
             corners = self.area_corners(obj, light, matrix)
             if corners is None:

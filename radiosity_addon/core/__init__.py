@@ -67,7 +67,7 @@ Lightmap               levels (RGBA float32 mip chain, alpha = coverage), filled
                        renderers that build their own mipmaps), surfaces and their surface_uv.
 lightmap_sizes(scene, settings=None, objects=None) -> {object: (width, height)}
                        the sizes bake_lightmaps will use (e.g. to bake material maps first).
-lightmap_seconds(scene, sizes) -> seconds    about how long bake_lightmaps takes for those sizes.
+lightmap_seconds(scene, sizes, settings) -> seconds  about how long bake_lightmaps takes for those sizes.
 render_preview(scene, lightmaps, camera=None, width=512, height=512, supersample=2, gpu=None)
     -> Preview         the scene from `camera` (default: the scene's own, else one that frames
                        it), lit only by the lightmaps, trilinearly filtered.

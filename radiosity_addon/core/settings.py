@@ -58,12 +58,14 @@ QUALITY_PRESETS = {
                         "hemicube_res": 24, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 1.0,
                         "probe_pieces": 3},
               "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
-              "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 4, "direct_subsamples": 2}},
+              "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 4, "direct_subsamples": 2,
+                            "sky_directions": 256}},
 }
 DEFAULT_TOLERANCE = QUALITY_PRESETS["final"]["tolerance"]
 
 PATCH_SIZE = 0.5  # scene units (metres): faces longer than this are split into patches
 MAX_SPLIT = 64  # patches along one side of a surface in the Patch Size mode
+MIN_SKY_DIRECTIONS, MAX_SKY_DIRECTIONS = 16, 4096  # a texel's own sky: from this many directions
 TEXEL_DENSITY = 64.0  # lightmap texels per scene unit (metre): 15.6 mm texels
 MAX_LIGHTMAP_SIZE = 1024  # texels, the largest side of a lightmap
 LIGHTMAP_GUTTER = 2  # texels dilated around every chart, at every mip level
@@ -165,6 +167,7 @@ class LightmapSettings:
     # a pixel at the scene's diameter would still be finer than a texel: lightmap.direct.matched_map_resolution)
     direct_pieces: int = 8  # emissive polygons and area lamps shoot that light in up to N x N pieces (penumbrae)
     direct_subsamples: int = 4  # where that light is sharp, a texel takes the mean of N x N points over its square (1: its centre)
+    sky_directions: int = 0  # the sky's light recomputed at every texel from N directions (0: the elements' interpolated)
 
     @classmethod
     def preset(cls, quality: str = "good", **given) -> "LightmapSettings":
@@ -184,3 +187,6 @@ class LightmapSettings:
             raise SolveError(f"direct light pieces per side must be 1..16, got {self.direct_pieces}")
         if not 1 <= self.direct_subsamples <= 8:
             raise SolveError(f"direct light points per texel side must be 1..8, got {self.direct_subsamples}")
+        if not (self.sky_directions == 0 or MIN_SKY_DIRECTIONS <= self.sky_directions <= MAX_SKY_DIRECTIONS):
+            raise SolveError(f"the sky's directions per texel must be 0 (none) or {MIN_SKY_DIRECTIONS}.."
+                             f"{MAX_SKY_DIRECTIONS}, got {self.sky_directions}")

@@ -20,6 +20,7 @@ class Solution:
     element_light: np.ndarray | None = None  # (P, S, S, 3)
     patch_direct: np.ndarray | None = None  # (P, 3) the part of H straight from lamps and emitters
     element_direct: np.ndarray | None = None  # (P, S, S, 3)
+    element_sky: np.ndarray | None = None  # (P, S, S, 3 or 1) the part of H straight from the sky
     scene: object = None  # the scene as solved (material maps applied, small faces clustered), for the lightmaps' direct light
     clusters: object = None  # FaceClusters: the given scene's faces and the surfaces solved (None: the same)
 

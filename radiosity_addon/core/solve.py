@@ -75,7 +75,7 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
         with plan.stage("method", f"solving {len(patches)} patches ({settings.method})"):
             result = _solve_patches(solve_gpu, scene, patches, settings, effects, timer, plan.within(),
                                     should_cancel, preview, preview_interval, measured, clusters)
-    radiosity, elements, light, element_light, direct, element_direct, details = result
+    radiosity, elements, light, element_light, direct, element_direct, element_sky, details = result
     timer.timings["total"] = time.perf_counter() - started
     element_count = len(patches) * elements.shape[1] ** 2
     report = Report(method=settings.method, settings=settings,
@@ -87,27 +87,27 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
     return Solution(patches=patches, patch_radiosity=np.asarray(radiosity, dtype=np.float64),
                     element_radiosity=elements, report=report, patch_light=np.asarray(light, dtype=np.float64),
                     element_light=element_light, patch_direct=np.asarray(direct, dtype=np.float64),
-                    element_direct=element_direct, scene=scene, clusters=clusters)
+                    element_direct=element_direct, element_sky=element_sky, scene=scene, clusters=clusters)
 
 
 def _solve_patches(gpu: GPU, scene: Scene, patches, settings: SolveSettings, effects, timer: StageTimer, progress,
                    should_cancel, preview, preview_interval, measured=None, clusters=None):
     """One method's solve on these patches: (B, element B, H, element H, direct H, element direct H,
-    details); element arrays (P, S, S, 3), or for the hemi-cube method's one value per patch the
-    patch arrays as 1 x 1 elements. `measured`: refinement's probe of the direct light; `clusters`:
+    element sky H, details); element arrays (P, S, S, 3), or for the hemi-cube method's one value
+    per patch the patch arrays as 1 x 1 elements. `measured`: refinement's probe of the direct light; `clusters`:
     the faces the patches' surfaces stand for (previews are laid out on them)."""
     if settings.method == "hemicube":
-        radiosity, elements, element_light, element_direct, details, _ = solve_hemicube(
+        radiosity, elements, element_light, element_direct, element_sky, details, _ = solve_hemicube(
             gpu, scene, patches, settings, effects, timer, progress, should_cancel, measured)
         areas = element_areas(patches, settings.hemicube_elements)
         return (radiosity, elements, patch_means(areas, element_light), element_light,
-                patch_means(areas, element_direct), element_direct, details)
+                patch_means(areas, element_direct), element_direct, element_sky, details)
     areas = element_areas(patches, settings.elements)
     shown = None if preview is None else (
         lambda radiosity, light: preview(Solution(patches, patch_means(areas, radiosity), radiosity,
                                                   patch_light=patch_means(areas, light), element_light=light,
                                                   scene=scene, clusters=clusters)))
-    radiosity, elements, element_light, element_direct, details = solve_progressive(
+    radiosity, elements, element_light, element_direct, element_sky, details = solve_progressive(
         gpu, scene, patches, settings, effects, timer, progress, should_cancel, shown, preview_interval)
     return (radiosity, elements, patch_means(areas, element_light), element_light,
-            patch_means(areas, element_direct), element_direct, details)
+            patch_means(areas, element_direct), element_direct, element_sky, details)

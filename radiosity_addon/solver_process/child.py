@@ -155,7 +155,8 @@ class Solve:
 
     def run(self) -> None:
         scene, solve_settings, lightmap_settings, objects, preview_interval = protocol.read_job(self.directory)
-        self.lightmap_seconds = core.lightmap_seconds(scene, core.lightmap_sizes(scene, lightmap_settings, objects))
+        self.lightmap_seconds = core.lightmap_seconds(scene, core.lightmap_sizes(scene, lightmap_settings, objects),
+                                                      lightmap_settings)
         own = self.gpu or core.GPU()
         with own, core.open_gpu(own) as gpu:
             preview = (self.preview(scene, lightmap_settings, objects, gpu)

@@ -125,7 +125,7 @@ def direct_light(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettin
 def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
                    timer: StageTimer, progress=None, should_cancel=None, measured: MeasuredDirectLight | None = None):
     """(patch radiosity B (P, 3), element radiosity (P, S, S, 3), element light H with B = E + ρH,
-    its direct part (lamps and emitters), HemicubeDetails, patch F). Receivers are the S x S
+    its direct part (lamps and emitters), its part straight from the sky, HemicubeDetails, patch F). Receivers are the S x S
     elements of every patch (S = hemicube_elements), shooters the patches: H_e = D_e + F_e R on
     every element (D: `direct_light`, R = B − E the light the patches reflect); a patch that
     reflects nothing gets no rows (with skips on), so its H is its direct light alone. `measured`:
@@ -176,4 +176,4 @@ def solve_hemicube(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSett
                           linear_solve=bool(effects.interreflection), bright_columns=len(bright),
                           direct=direct_work),
     )
-    return radiosity, elements, light, direct, details, form_factors
+    return radiosity, elements, light, direct, sky_light, details, form_factors

@@ -30,12 +30,11 @@ from ..scene.geometry import bilinear
 from ..settings import LightmapSettings
 from ..solution import Solution
 from ..timing import StagePlan, pulse
-from ..shooting.sky import element_frames
 from ..uvspace import rasterize
 from . import charts
-from .contact import in_contact, touching_clusters
-from .direct import (direct_light, emitters_reflected_light, emitters_reflection, footprint_points,
-                     matched_map_resolution, sharp_texels, texel_axes, texel_points)
+from .contact import contact_distance, in_contact, touching_clusters
+from .direct import (direct_light, emitters_reflection, footprint_points, map_resolutions,
+                     reflected_light_at_elements, sharp_texels, sky_light, texel_axes, texel_points)
 from .lattice import continuous_lattice, element_values, lattice_parameters
 from .mips import filled_image, mip_levels
 from .scattered import corner_values, element_samples
@@ -173,14 +172,18 @@ class ObjectTexels:
         return self.unit_patch[self.unit_of_texel[self.covered]]
 
 
-LIGHTMAP_SECONDS = {"texel": 1.5e-6, "face": 1.2e-5}  # measured on the production terrace (2 cores, llvmpipe)
+LIGHTMAP_SECONDS = {"texel": 1.5e-6, "face": 1.2e-5,  # measured on the production terrace (2 cores, llvmpipe)
+                    "texel_sky_direction": 3.7e-8}
 
 
-def predicted_seconds(scene: Scene, sizes: dict) -> float:
-    """About how long `bake_lightmaps` takes for lightmaps of `sizes` ({object: (w, h)}): its cost
-    follows their texels (direct light per texel) and the faces laid out and drawn."""
+def predicted_seconds(scene: Scene, sizes: dict, settings: LightmapSettings | None = None) -> float:
+    """About how long `bake_lightmaps` takes for lightmaps of `sizes` ({object: (w, h)}) with
+    `settings`: its cost follows their texels (direct light per texel, and the sky's directions
+    where it is recomputed per texel) and the faces laid out and drawn."""
     texels = sum(width * height for width, height in sizes.values())
-    return LIGHTMAP_SECONDS["texel"] * texels + LIGHTMAP_SECONDS["face"] * len(scene)
+    directions = settings.sky_directions if settings is not None and np.any(scene.world_color > 0) else 0
+    return (LIGHTMAP_SECONDS["texel"] + LIGHTMAP_SECONDS["texel_sky_direction"] * directions) * texels \
+        + LIGHTMAP_SECONDS["face"] * len(scene)
 
 
 def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings | None = None,
@@ -190,7 +193,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     solve's (its details' "eta": seconds left)."""
     settings = settings or LightmapSettings()
     layouts = plan_layouts(scene, settings, objects)
-    plan = StagePlan(progress, {"lightmaps": predicted_seconds(scene, layouts.sizes)})
+    plan = StagePlan(progress, {"lightmaps": predicted_seconds(scene, layouts.sizes, settings)})
     with plan.stage("lightmaps", f"laying out {len(layouts.objects)} lightmap(s)"):
         return _bake(scene, solution, settings, gpu, layouts)
 
@@ -204,8 +207,8 @@ def _bake(scene: Scene, solution: Solution, settings: LightmapSettings, gpu: GPU
     # lightmap's texels: an upper bound on its texels' density, so the maps err on the fine side)
     finest_texel = min((math.sqrt(scene.area[indices].sum() / math.prod(layouts.sizes[name]))
                         for name, indices in objects.items()), default=math.inf)
-    settings = replace(settings, direct_map_resolution=matched_map_resolution(
-        scene.diameter, finest_texel, settings.direct_map_resolution))
+    resolution, sun_maps = map_resolutions(scene, finest_texel, settings.direct_map_resolution)
+    settings = replace(settings, direct_map_resolution=resolution)
     patches = solution.patches
     solved = clusters.proxies
     light = settings.content == "light"
@@ -213,11 +216,15 @@ def _bake(scene: Scene, solution: Solution, settings: LightmapSettings, gpu: GPU
     per_texel = settings.direct_per_texel and solution.patch_direct is not None and report is not None
     mapped_objects = [solved.object_names.index(name) for name in scene.material_maps if name in solved.object_names]
     mapped = np.isin(solved.object_index[patches.surface], mapped_objects)
-    # what is interpolated: the light H (less its direct part when texels get that), or B for
-    # "combined" where no material map turns H into B texel by texel
+    # what is interpolated: the light H (less its direct part when texels get that, and its sky
+    # part where they get that too), or B for "combined" where no material map turns H into B
     reflected = None
+    texel_sky = (settings.sky_directions > 0 and per_texel and solution.element_sky is not None
+                 and bool(np.any(solution.scene.world_color > 0)))
     if per_texel:
         values = element_values(solution, light=True) - element_values(solution, direct=True)
+        if texel_sky:
+            values = values - element_values(solution, sky=True)
         reflected = emitters_reflection(patches, solution.patch_radiosity)
         if reflected is not None:  # the texels take it from the emitters' pieces too (`add_direct_light`)
             values = values - reflected_light_at_elements(gpu, solution, settings, reflected, values.shape[1])
@@ -282,8 +289,10 @@ def _bake(scene: Scene, solution: Solution, settings: LightmapSettings, gpu: GPU
                 entry.nearest_patch = np.where(covered, hint[np.maximum(unit_of_texel, 0)], -1)
             texels[name] = entry
         if per_texel:
-            add_direct_light(lightmap_gpu, solution, clusters, faces, texels, settings, reflected)
-        clear_contacts(faces, texels, _holds_b(mapped, faces, scene) if not (per_texel or light) else None, clusters)
+            add_direct_light(lightmap_gpu, solution, clusters, faces, texels, settings, reflected, texel_sky,
+                             sun_maps)
+        clear_contacts(faces, texels, _holds_b(mapped, faces, scene) if not (per_texel or light) else None, clusters,
+                       1.0 / settings.texel_density)
     lightmaps = {}
     for name, entry in texels.items():
         size, indices = layouts.sizes[name], objects[name]
@@ -330,11 +339,14 @@ def covered_texels(texels: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, li
     return points, faces, patches, [int(entry.covered.sum()) for entry in entries]
 
 
-def clear_contacts(faces: Scene, texels: dict, holds_b, clusters=None) -> None:
-    """Texels under a face touching theirs see nothing (`contact`): their light H becomes 0, and
-    B = E where a texel holds the interpolated B (`holds_b`: per patch and per face; None: nowhere)."""
+def clear_contacts(faces: Scene, texels: dict, holds_b, clusters=None, texel: float = 0.0) -> None:
+    """Texels under a face touching theirs (`contact`; texels `texel` wide) see nothing: their light
+    H becomes 0, and B = E where a texel holds the interpolated B (`holds_b`: per patch and per
+    face; None: nowhere)."""
     points, face, patch, counts = covered_texels(texels)
-    touched = in_contact(faces, points, face, None if clusters is None else touching_clusters(clusters))
+    distance = contact_distance(faces, texel)
+    touched = in_contact(faces, points, face, None if clusters is None else touching_clusters(clusters, distance),
+                         distance)
     cleared = np.zeros((len(face), 3))
     if holds_b is not None:
         by_patch, by_face = holds_b
@@ -350,27 +362,14 @@ def clear_contacts(faces: Scene, texels: dict, holds_b, clusters=None) -> None:
         entry.values[entry.covered] = values
 
 
-def reflected_light_at_elements(gpu: GPU | None, solution: Solution, settings: LightmapSettings,
-                                reflected: np.ndarray, elements: int) -> np.ndarray:
-    """(P, S, S, 3) the light the elements' centres get from what the emitters reflect
-    (`emitters_reflected_light`): the part of the solve's light the texels recompute."""
-    patches, report = solution.patches, solution.report
-    points = element_frames(patches, elements)[0]
-    owners = np.repeat(np.arange(len(patches)), elements * elements)
-    with open_gpu(gpu) as own_gpu:
-        light = emitters_reflected_light(own_gpu, solution.scene, patches, points, patches.normal[owners],
-                                         patches.plane[owners], reflected, report.settings.visibility,
-                                         settings.direct_map_resolution, report.effects.occlusion,
-                                         settings.direct_pieces)
-    return light.reshape(len(patches), elements, elements, 3)
-
-
 def add_direct_light(gpu: GPU, solution: Solution, clusters, faces: Scene, texels: dict, settings: LightmapSettings,
-                     reflected: np.ndarray | None = None) -> None:
+                     reflected: np.ndarray | None = None, sky: bool = False, sun_maps: tuple = (None, 1)) -> None:
     """Add every lightmap's direct light texel by texel (one pass over all texels per shot), the
     mean over the texel's square where it is sharp (a second pass over those texels' points; each
     unit's world step per texel is its `axes`); the emitters send what they reflect of `reflected`
-    (P, 3) too, when given."""
+    (P, 3) too, when given; with `sky`, the sky's light at each texel's centre from the settings'
+    `sky_directions` (it is soft); suns' maps are (pixels across, directions over a sun's disc)
+    `sun_maps` (None pixels: the settings' `direct_map_resolution`)."""
     points, face, patch, counts = covered_texels(texels)
     patches = solution.patches
     on_patch = patch >= 0
@@ -380,7 +379,7 @@ def add_direct_light(gpu: GPU, solution: Solution, clusters, faces: Scene, texel
     report = solution.report
     shoot = lambda at, normal, plane: direct_light(  # noqa: E731
         gpu, solution.scene, patches, at, normal, plane, report.settings.visibility, settings.direct_map_resolution,
-        report.effects.occlusion, settings.direct_pieces, reflected, clusters)[0]
+        report.effects.occlusion, settings.direct_pieces, reflected, clusters, *sun_maps)[0]
     light = shoot(points, normals, planes)
     # where light may bend smoothly: a face the solve kept, or a cluster's faces together
     surface = clusters.proxy_of_face[face]
@@ -402,6 +401,9 @@ def add_direct_light(gpu: GPU, solution: Solution, clusters, faces: Scene, texel
         taken = np.bincount(texel, minlength=len(sharp))
         light[sharp] = np.stack([np.bincount(texel, weights=spread[:, c], minlength=len(sharp))
                                  for c in range(3)], axis=1) / taken[:, None]
+    if sky:
+        light += sky_light(gpu, solution.scene, patches, points, normals, planes, settings.sky_directions,
+                           report.effects.occlusion, clusters)
     start = 0
     for entry, count in zip(texels.values(), counts):
         entry.values[entry.covered] = np.maximum(entry.values[entry.covered] + light[start:start + count], 0.0)

@@ -4,8 +4,10 @@ book's bottom on its shelf — sees nothing but the back of what touches it. Cyc
 without this test it would take its patch's interpolated light (a leak through the contact).
 
 Touching faces are found among nearby faces (`scene.neighbours.near_pairs`, linear in the scene):
-fronts facing each other (normals opposite within PARALLEL) on one plane (within
-CONTACT_DISTANCE of the scene's diameter: an emitter hung 2 cm under a ceiling does not touch it).
+fronts facing each other (normals opposite within PARALLEL) closer than the contact distance:
+CONTACT_DISTANCE of the scene's diameter, and where the lightmaps are coarser, half a texel (a
+sofa set 2 mm over the floor lets no light under it that a texel could show, and Cycles bakes it
+black; an emitter hung 2 cm under a ceiling of 16 mm texels does not touch it).
 A texel is in contact when its point lies inside such a partner's polygon. Faces the solve took in
 clusters are searched only where their clusters' rectangles touch (`touching_clusters`): a dense
 mesh's faces are many, and few of them rest on anything."""
@@ -18,6 +20,7 @@ from ..scene import Scene
 from ..scene.neighbours import near_pairs, range_chunks
 
 CONTACT_DISTANCE = 1e-4  # planes closer than this (times the scene's diameter) touch
+CONTACT_TEXELS = 0.5  # ... or closer than this share of a lightmap texel
 PARALLEL = 0.999  # -cos between the normals of two faces that touch face to face
 POINT_CHUNK = 1 << 20  # (texel, partner) tests at once
 
@@ -37,13 +40,20 @@ def _facing_somewhere(normals: np.ndarray) -> np.ndarray:
     return found
 
 
-def touching_faces(scene: Scene, surfaces: np.ndarray, candidates: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def contact_distance(scene: Scene, texel: float = 0.0) -> float:
+    """How far apart facing faces touch (module doc), for lightmap texels `texel` wide."""
+    return max(CONTACT_DISTANCE * scene.diameter, CONTACT_TEXELS * texel)
+
+
+def touching_faces(scene: Scene, surfaces: np.ndarray, candidates: np.ndarray | None = None,
+                   distance: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(surface, partner) pairs: `surfaces` (some of the scene's) and the faces touching their
-    fronts face to face, among `candidates` (a mask of faces; None: all)."""
+    fronts face to face within `distance` (None: `contact_distance` of no texel), among
+    `candidates` (a mask of faces; None: all)."""
     corners = scene.corners
     centre = corners.mean(axis=1)
     radius = np.linalg.norm(corners - centre[:, None], axis=2).max(axis=1)
-    tolerance = CONTACT_DISTANCE * scene.diameter
+    tolerance = contact_distance(scene) if distance is None else distance
     normal = scene.normal
     facing = _facing_somewhere(normal)
     if candidates is not None:
@@ -77,13 +87,17 @@ def inside_polygons(points: np.ndarray, corners: np.ndarray, normals: np.ndarray
     return inside
 
 
-def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray, candidates: np.ndarray | None = None) -> np.ndarray:
+def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray, candidates: np.ndarray | None = None,
+               distance: float | None = None) -> np.ndarray:
     """(N,) whether each point (N, 3), lying on the front of its surface `surfaces` (N,), is
-    covered by a face touching that front (faces among `candidates`, a mask; None: all)."""
+    covered by a face touching that front within `distance` (`touching_faces`; faces among
+    `candidates`, a mask; None: all)."""
     covered = np.zeros(len(points), dtype=bool)
     if len(points) == 0:
         return covered
-    touched, partner = touching_faces(scene, np.unique(surfaces), candidates)
+    tolerance = contact_distance(scene) if distance is None else distance
+    edge = CONTACT_DISTANCE * scene.diameter  # a texel just past the partner's edge is not under it
+    touched, partner = touching_faces(scene, np.unique(surfaces), candidates, tolerance)
     if len(touched) == 0:
         return covered
     # each surface's points sorted along one axis in its plane (its longest), so that a partner
@@ -101,7 +115,6 @@ def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray, candidate
     point_keys = keys(surfaces, np.take_along_axis(points, axis[surfaces][:, None], 1)[:, 0])
     order = np.argsort(point_keys, kind="stable")
     sorted_keys = point_keys[order]
-    tolerance = CONTACT_DISTANCE * scene.diameter
     along = axis[touched]
     partner_low = np.take_along_axis(low[partner], along[:, None], 1)[:, 0] - tolerance
     partner_high = np.take_along_axis(high[partner], along[:, None], 1)[:, 0] + tolerance
@@ -109,18 +122,36 @@ def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray, candidate
     count = np.searchsorted(sorted_keys, keys(touched, partner_high), side="right") - start
     for pair, at in range_chunks(start, count, POINT_CHUNK):
         point = order[at]
-        hit = inside_polygons(points[point], scene.corners[partner[pair]], scene.normal[partner[pair]], tolerance)
+        hit = inside_polygons(points[point], scene.corners[partner[pair]], scene.normal[partner[pair]], edge)
         covered[point[hit]] = True
     return covered
 
 
-def touching_clusters(clusters) -> np.ndarray | None:
-    """(F,) the faces whose cluster's rectangle touches another's (scene.face_clusters; a face the
-    solve took as it is, its own), the only ones that may touch; None where nothing was clustered."""
+def touching_clusters(clusters, distance: float | None = None) -> np.ndarray | None:
+    """(F,) the faces whose cluster touches another's within `distance` (scene.face_clusters; a
+    face the solve took as it is, its own), the only ones that may touch; None where nothing was
+    clustered. A cluster is taken as wide as its faces reach from its rectangle's centre, as
+    thick as they stray from its plane and as bent as their normals turn from its (a sofa's
+    bottom with a bevel's start in it still meets the floor under it)."""
     if clusters.is_identity:
         return None
-    proxies = clusters.proxies
-    surface, partner = touching_faces(proxies, np.arange(len(proxies)))
+    faces, proxies, of = clusters.faces, clusters.proxies, clusters.proxy_of_face
+    distance = contact_distance(faces) if distance is None else distance
+    centre, normal = proxies.corners.mean(axis=1), proxies.normal
+    offsets = faces.corners - centre[of][:, None, :]
+    radius, slack, turn = (np.zeros(len(proxies)) for _ in range(3))
+    np.maximum.at(radius, of, np.linalg.norm(offsets, axis=2).max(axis=1))
+    np.maximum.at(slack, of, np.abs(np.einsum("fkj,fj->fk", offsets, normal[of])).max(axis=1))
+    np.maximum.at(turn, of, np.arccos(np.clip(np.einsum("fj,fj->f", faces.normal, normal[of]), -1.0, 1.0)))
     touching = np.zeros(len(proxies), dtype=bool)
-    touching[surface] = touching[partner] = True
-    return touching[clusters.proxy_of_face]
+    everything = np.arange(len(proxies))
+    for query, other in near_pairs(centre, radius + distance, everything, radius + distance):
+        surface = everything[query]
+        between = np.arccos(np.clip(-np.einsum("ij,ij->i", normal[surface], normal[other]), -1.0, 1.0))
+        bend = turn[surface] + turn[other]
+        facing = between < np.arccos(PARALLEL) + bend
+        apart = np.abs(np.einsum("ij,ij->i", centre[other] - centre[surface], normal[surface]))
+        near = apart < distance + slack[surface] + slack[other] + radius[other] * np.sin(np.minimum(between, np.pi / 2))
+        keep = facing & near & (other != surface)
+        touching[surface[keep]] = touching[other[keep]] = True
+    return touching[of]

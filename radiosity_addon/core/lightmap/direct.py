@@ -1,6 +1,7 @@
-"""Direct light texel by texel: every texel of every lightmap gathers the lamps', the sun's and the
-emitters' light with its own visibility (`shooting.TexelReceivers`), so shadows and penumbrae are
-as sharp as the lightmap can show; the smooth rest of the light comes from the solve's elements.
+"""Direct light texel by texel: every texel of every lightmap gathers the lamps', the sun's, the
+emitters' and the sky's light with its own visibility (`shooting.TexelReceivers`), so shadows and
+penumbrae are as sharp as the lightmap can show; the smooth rest of the light (what the surfaces
+reflect) comes from the solve's elements.
 
 A texel's point is the world point its centre shows on the patch whose UV footprint holds it (a
 texel a footprint only grazes: the footprint's nearest point), so every sample lies on a
@@ -18,18 +19,25 @@ whole bake's squared error at texel centres.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ..gpu import GPU
+from ..gpu import GPU, open_gpu
 from ..scene import Patches, Scene
 from ..scene.geometry import bilinear
-from ..settings import VISIBILITY_VARIANTS
+from ..settings import VISIBILITY_VARIANTS, LightmapSettings
+from ..solution import Solution
 from ..shooting import direct_shooters, emitter_shooters, light_at_receivers
+from ..shooting.shooters import DIRECTIONAL
+from ..shooting.sky import SKY_MAP_RESOLUTION, element_frames, sky_shooters
 from ..uvspace import rasterize
 
 REFLECTION_FLOOR = 1e-4  # emitters reflecting less than this share of the brightest emission are not shot again
 MIN_MAP_RESOLUTION = 64  # the coarsest visibility map `matched_map_resolution` gives
 MAP_RESOLUTION_STEP = 16  # ... and its multiple (a hemi-cube's top face is a quarter of it, times 2)
+SUN_MAP_RESOLUTION = 2048  # the finest sun's map `sun_map_resolution` gives (16 MiB of depth and items)
+SUN_DISC_DIRECTIONS = 16  # directions a sun's disc is shot from at most (its penumbra in 16 steps)
 
 
 def matched_map_resolution(diameter: float, finest_texel: float, cap: int) -> int:
@@ -42,6 +50,34 @@ def matched_map_resolution(diameter: float, finest_texel: float, cap: int) -> in
     needed = 4.0 * diameter / max(finest_texel, 1e-30)
     stepped = MAP_RESOLUTION_STEP * int(np.ceil(min(needed, 1e9) / MAP_RESOLUTION_STEP))
     return int(min(cap, max(MIN_MAP_RESOLUTION, stepped)))
+
+
+def sun_map_resolution(diameter: float, finest_texel: float, matched: int) -> int:
+    """Pixels across a sun's map for lightmaps whose finest texel is `finest_texel`: its one
+    orthographic map spans the scene's `diameter`, so 4 diameter / texel pixels give every texel
+    four across (a chair's 3.5 cm leg casts its shadow, a leaf's cut-out its edge); one map per
+    sun, so SUN_MAP_RESOLUTION bounds it rather than the preset's cap, and it is never coarser
+    than the other shots' `matched` (`matched_map_resolution`)."""
+    needed = 4.0 * diameter / max(finest_texel, 1e-30)
+    stepped = MAP_RESOLUTION_STEP * int(np.ceil(min(needed, 1e9) / MAP_RESOLUTION_STEP))
+    return int(max(matched, min(SUN_MAP_RESOLUTION, stepped)))
+
+
+def sun_disc_directions(scene: Scene, finest_texel: float) -> int:
+    """Directions over a sun's disc for texels `finest_texel` wide: enough that its penumbra at
+    the scene's diameter (the farthest an occluder can be) is about a direction per texel
+    across, SUN_DISC_DIRECTIONS at most; 1 where the penumbra is under a texel."""
+    angle = max((lamp.angle for lamp in scene.lamps if lamp.type == "sun"), default=0.0)
+    across = scene.diameter * math.tan(angle) / max(finest_texel, 1e-30)
+    return int(np.clip(math.ceil(min(across, 1e3) ** 2), 1, SUN_DISC_DIRECTIONS)) if across >= 1 else 1
+
+
+def map_resolutions(scene: Scene, finest_texel: float, cap: int) -> tuple[int, tuple[int, int]]:
+    """(pixels across the direct light's maps, (pixels across a sun's map, directions over a sun's
+    disc)) for lightmaps whose finest texel is `finest_texel`, the maps' pixels at most `cap`."""
+    matched = matched_map_resolution(scene.diameter, finest_texel, cap)
+    sun = (sun_map_resolution(scene.diameter, finest_texel, matched), sun_disc_directions(scene, finest_texel))
+    return matched, sun
 
 
 def texel_points(gpu: GPU, corners: np.ndarray, corners_texels: np.ndarray, size) -> tuple:
@@ -132,6 +168,21 @@ def emitters_reflection(patches: Patches, radiosity: np.ndarray) -> np.ndarray |
     return reflected if reflected.max() > REFLECTION_FLOOR * patches.emission.max() else None
 
 
+def reflected_light_at_elements(gpu: GPU | None, solution: Solution, settings: LightmapSettings,
+                                reflected: np.ndarray, elements: int) -> np.ndarray:
+    """(P, S, S, 3) the light the elements' centres get from what the emitters reflect
+    (`emitters_reflected_light`): the part of the solve's light the texels recompute."""
+    patches, report = solution.patches, solution.report
+    points = element_frames(patches, elements)[0]
+    owners = np.repeat(np.arange(len(patches)), elements * elements)
+    with open_gpu(gpu) as own_gpu:
+        light = emitters_reflected_light(own_gpu, solution.scene, patches, points, patches.normal[owners],
+                                         patches.plane[owners], reflected, report.settings.visibility,
+                                         settings.direct_map_resolution, report.effects.occlusion,
+                                         settings.direct_pieces)
+    return light.reshape(len(patches), elements, elements, 3)
+
+
 def emitters_reflected_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, normals: np.ndarray,
                              planes: np.ndarray, reflected: np.ndarray, visibility: str, resolution: int,
                              occlusion: bool, pieces: int) -> np.ndarray:
@@ -154,15 +205,36 @@ def shot_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, nor
                                   occlusion, clusters=clusters)
 
 
+def sky_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, normals: np.ndarray, planes: np.ndarray,
+              directions: int, occlusion: bool, clusters=None) -> np.ndarray:
+    """(N, 3) the light the world colour sends to `points` (as `direct_light` takes them), from
+    `directions` of the sky (`shooting.sky`) each with its own map: what a texel's own view of the
+    sky lets through (beside a sofa's foot, on a part sunk into another), where the elements' sky
+    is a patch's mean."""
+    if not np.any(scene.world_color > 0):
+        return np.zeros((len(points), 3))
+    low, high = scene.bounds
+    shooters = sky_shooters(scene.world_color, (low + high) / 2, scene.diameter, directions)
+    return shot_light(gpu, scene, patches, points, normals, planes, shooters, "hemicube", SKY_MAP_RESOLUTION,
+                      occlusion, clusters)
+
+
 def direct_light(gpu: GPU, scene: Scene, patches: Patches, points: np.ndarray, normals: np.ndarray,
                  planes: np.ndarray, visibility: str, resolution: int, occlusion: bool, pieces: int,
-                 reflected: np.ndarray | None = None, clusters=None) -> tuple[np.ndarray, int]:
+                 reflected: np.ndarray | None = None, clusters=None,
+                 sun_resolution: int | None = None, sun_directions: int = 1) -> tuple[np.ndarray, int]:
     """(N, 3) direct light H at `points` (N, 3) with `normals` (N, 3), looked up as points of the
     solved surfaces' sides `planes` (N,) (`Patches.plane`), and the number of shots (emitters and
     area lamps in up to `pieces` x `pieces` each; the emitters send what they reflect of
     `reflected` (P, 3) too, when given). With `clusters` the clusters' faces occlude in place of
-    their rectangles (`shooting.surface_visibility`)."""
-    shooters = direct_shooters(scene, patches, pieces, reflected)
-    light = shot_light(gpu, scene, patches, points, normals, planes, shooters, visibility, resolution, occlusion,
+    their rectangles (`shooting.surface_visibility`); suns' maps are `sun_resolution` pixels
+    across (None: `resolution`), and a sun with an angle shoots from `sun_directions` over its disc."""
+    shooters = direct_shooters(scene, patches, pieces, reflected, sun_directions)
+    suns = [shooter for shooter in shooters if shooter.kind == DIRECTIONAL] if sun_resolution else []
+    others = [shooter for shooter in shooters if not (suns and shooter.kind == DIRECTIONAL)]
+    light = shot_light(gpu, scene, patches, points, normals, planes, others, visibility, resolution, occlusion,
                        clusters)
+    if suns:
+        light += shot_light(gpu, scene, patches, points, normals, planes, suns, visibility, sun_resolution,
+                            occlusion, clusters)
     return light, len(shooters)

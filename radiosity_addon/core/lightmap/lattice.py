@@ -19,11 +19,13 @@ from ..solution import Solution
 SMOOTH_EDGE_DEGREES = 30.0  # faces meeting flatter than this share values at their edge (Blender's auto smooth)
 
 
-def element_values(solution: Solution, light: bool = False, direct: bool = False) -> np.ndarray:
+def element_values(solution: Solution, light: bool = False, direct: bool = False, sky: bool = False) -> np.ndarray:
     """(P, S, S, 3) radiosity B (with `light` the light H, B = E + ρH; with `direct` the part of H
-    straight from lamps and emitters): the elements, or the patch values as S = 1 (a grey
-    one-channel result is repeated into three)."""
-    if direct:
+    straight from lamps and emitters; with `sky` the part straight from the sky): the elements, or
+    the patch values as S = 1 (a grey one-channel result is repeated into three)."""
+    if sky:
+        elements, patches = solution.element_sky, solution.element_sky
+    elif direct:
         elements, patches = solution.element_direct, solution.patch_direct
     elif light:
         elements, patches = solution.element_light, solution.patch_light

@@ -80,7 +80,8 @@ class ProgressiveDetails:
 def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveSettings, effects: SceneEffects,
                       timer: StageTimer, progress=None, should_cancel=None, preview=None, preview_interval=2.0):
     """(patch radiosity (P, 3), element radiosity (P, S, S, 3), element light H (P, S, S, 3), its
-    direct part (lamps and emitters, not the sky), ProgressiveDetails), with B = E + ρH.
+    direct part (lamps and emitters, not the sky), its part straight from the sky,
+    ProgressiveDetails), with B = E + ρH.
     `effects` (the scene analysis) may switch off visibility maps (nothing occludes) and
     residual updates (no interreflection: only emitters and lamps ever shoot).
     `preview(element radiosity, element light)` is called every `preview_interval` seconds with
@@ -237,4 +238,4 @@ def solve_progressive(gpu: GPU, scene: Scene, patches: Patches, settings: SolveS
                              shooter_clusters=0 if clusters is None else len(clusters[-1]),
                              cluster_shots=cluster_shots),
     )
-    return patch_radiosity, elements, light, direct_light, details
+    return patch_radiosity, elements, light, direct_light, before_emitters - lamp_light, details

@@ -32,6 +32,7 @@ class Lamp:
     spot_size: float = math.pi  # full cone angle
     spot_blend: float = 0.0
     vertices: np.ndarray | None = None  # area: (4, 3), front along the emission
+    angle: float = 0.0  # sun: the angular diameter of its disc (radians; Blender's Angle)
 
     @property
     def intensity(self) -> np.ndarray:
@@ -81,8 +82,11 @@ def lamp_from_dict(entry: dict, index: int) -> Lamp:
                     spot_blend=min(number(entry.get("spot_blend", 0.0), "spot_blend", where), 1.0),
                     direction=_direction(entry, where))
     if kind == "sun":
+        angle = number(entry.get("angle", 0.0), "angle", where)
+        if not 0 <= angle < math.pi:
+            raise SceneError(f"{where}: 'angle' must lie in [0, π), got {angle}")
         return Lamp(name, kind, color, direction=_direction(entry, where),
-                    strength=number(entry.get("strength"), "strength", where))
+                    strength=number(entry.get("strength"), "strength", where), angle=angle)
     raw = entry.get("vertices")
     if not isinstance(raw, list) or len(raw) != 4:
         raise SceneError(f"{where}: an area lamp needs 4 'vertices'")

@@ -45,11 +45,12 @@ MAX_SPLIT_EMITTERS = 64  # emitting polygons split into pieces for the texel pas
 SOLVE_EMITTER_PIECES = 256  # the solve's element light needs fewer: about this many pieces in all
 
 
-def lamps_as_shooters(scene: Scene, max_split: int = AREA_LAMP_MAX_SPLIT) -> list[Shooter]:
-    """Every lamp's shots (an area lamp in at most `max_split` x `max_split` pieces)."""
+def lamps_as_shooters(scene: Scene, max_split: int = AREA_LAMP_MAX_SPLIT, sun_directions: int = 1) -> list[Shooter]:
+    """Every lamp's shots (an area lamp in at most `max_split` x `max_split` pieces, a sun with an
+    angle in `sun_directions` over its disc)."""
     low, high = scene.bounds
     return [shooter for lamp in scene.lamps
-            for shooter in lamp_shooters(lamp, (low + high) / 2, scene.diameter, max_split)]
+            for shooter in lamp_shooters(lamp, (low + high) / 2, scene.diameter, max_split, sun_directions)]
 
 
 def emitter_pieces(scene: Scene, patches: Patches, occlusion: bool = True,
@@ -122,10 +123,12 @@ def emitter_shooters(scene: Scene, patches: Patches, max_split: int, reflected: 
 
 
 def direct_shooters(scene: Scene, patches: Patches, max_split: int = AREA_LAMP_MAX_SPLIT,
-                    reflected: np.ndarray | None = None) -> list[Shooter]:
-    """Every shot of the lightmaps' direct light: the lamps', and the emitting polygons' in pieces
-    (`emitter_shooters`, with what they reflect of `reflected` (P, 3) when given)."""
-    return lamps_as_shooters(scene, max_split) + emitter_shooters(scene, patches, max_split, reflected)
+                    reflected: np.ndarray | None = None, sun_directions: int = 1) -> list[Shooter]:
+    """Every shot of the lightmaps' direct light: the lamps' (a sun with an angle in
+    `sun_directions`), and the emitting polygons' in pieces (`emitter_shooters`, with what they
+    reflect of `reflected` (P, 3) when given)."""
+    return (lamps_as_shooters(scene, max_split, sun_directions)
+            + emitter_shooters(scene, patches, max_split, reflected))
 
 
 def shoot_lamps(scene: Scene, shooting: ShootingPass) -> DirectLightWork:

@@ -16,8 +16,8 @@ AREA_LAMP_MAX_SPLIT = 8  # pieces per side at most
 
 
 def lamp_shooters(lamp: Lamp, scene_centre: np.ndarray, scene_diameter: float,
-                  max_split: int = AREA_LAMP_MAX_SPLIT) -> list[Shooter]:
-    """The shots of one lamp (see the module doc)."""
+                  max_split: int = AREA_LAMP_MAX_SPLIT, sun_directions: int = 1) -> list[Shooter]:
+    """The shots of one lamp (see the module doc); a sun with an angle in `sun_directions`."""
     if lamp.type in ("point", "spot"):
         cone = lamp.type == "spot"
         cos_half = math.cos(lamp.spot_size / 2) if cone else -2.0
@@ -28,11 +28,27 @@ def lamp_shooters(lamp: Lamp, scene_centre: np.ndarray, scene_diameter: float,
                         spot_cos_half=cos_half, spot_smooth=(1 - cos_half) * lamp.spot_blend if cone else 0.0)
                 for pole in poles]
     if lamp.type == "sun":
-        eye = scene_centre - lamp.direction * scene_diameter
-        return [Shooter(position=eye, axes=(*tangent_frame(lamp.direction), lamp.direction),
-                        polygon=np.zeros((4, 3)), area=0.0, radiosity=lamp.color * lamp.strength, kind=DIRECTIONAL,
-                        light_direction=tuple(lamp.direction), ortho_extent=scene_diameter / 2)]
+        directions = sun_disc(lamp.direction, lamp.angle, sun_directions if lamp.angle > 0 else 1)
+        irradiance = lamp.color * lamp.strength / len(directions)
+        return [Shooter(position=scene_centre - d * scene_diameter, axes=(*tangent_frame(d), d),
+                        polygon=np.zeros((4, 3)), area=0.0, radiosity=irradiance, kind=DIRECTIONAL,
+                        light_direction=tuple(d), ortho_extent=scene_diameter / 2) for d in directions]
     return polygon_shooters(lamp.vertices, lamp.area_radiance, scene_diameter, max_split=max_split)
+
+
+def sun_disc(direction: np.ndarray, angle: float, count: int) -> np.ndarray:
+    """(count, 3) unit directions of light spread evenly over a sun's disc of angular diameter
+    `angle` around `direction` (a Vogel spiral: equal areas of the disc, as Cycles samples it
+    uniformly), so a leaf's shadow has the penumbra it has in Cycles; one: `direction` itself."""
+    direction = np.asarray(direction, dtype=np.float64)
+    if count <= 1:
+        return direction[None]
+    k = np.arange(count) + 0.5
+    radius = math.tan(angle / 2) * np.sqrt(k / count)
+    around = math.pi * (3.0 - math.sqrt(5.0)) * k
+    u, v = tangent_frame(direction)
+    spread = direction + radius[:, None] * (np.cos(around)[:, None] * u + np.sin(around)[:, None] * v)
+    return spread / np.linalg.norm(spread, axis=1, keepdims=True)
 
 
 def polygon_shooters(corners: np.ndarray, radiance: np.ndarray, scene_diameter: float, patch: int = -1,
