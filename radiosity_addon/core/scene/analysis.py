@@ -5,7 +5,7 @@ any GPU work, so a solve simulates only those (the report's `effects`).
 - occlusion: False when no surface can hide any part of another — every surface lies in
   the closed front half-space of every other one (the inside of a convex room, two
   facing panels), so segments between surfaces stay inside a convex region bounded by
-  their planes and cannot cross a third surface;
+  their planes and cannot cross a third surface, and no sun or sky comes from outside;
 - interreflection: False when no two reflective surfaces can see each other (a surface
   must have a vertex strictly in front of the other's plane, both ways): light then
   bounces at most once, B = E + ρ F E;
@@ -87,15 +87,16 @@ def _inside_every_front(scene: Scene, points: np.ndarray) -> bool:
 
 def can_occlude(scene: Scene) -> bool:
     """Surfaces lying in front of every other surface's plane bound a convex region; lamps inside
-    it (point, spot, area corners) reach everything unblocked. A sun comes from outside: walls
-    of such a room do block it, so a sun always counts as possible occlusion."""
+    it (point, spot, area corners) reach everything unblocked. A sun and the sky come from
+    outside: walls of such a room do block them (a card over a floor hides the sky from it), so
+    either always counts as possible occlusion."""
     tolerance = PLANE_TOLERANCE * scene.diameter
     if len(scene) ** 2 * 4 > PAIR_BUDGET:
         return True  # too big to prove convex within the budget: simulate occlusion
     if any(np.any(_plane_heights(scene, rows, scene.corners) < -tolerance) for rows in _chunks(len(scene), 4 * len(scene))):
         return True
     lamps = scene.lamps
-    if any(lamp.type == "sun" for lamp in lamps):
+    if any(lamp.type == "sun" for lamp in lamps) or np.any(scene.world_color > 0):
         return True
     points = [lamp.position[None] for lamp in lamps if lamp.position is not None]
     points += [lamp.vertices for lamp in lamps if lamp.vertices is not None]
