@@ -7,6 +7,7 @@ import pytest
 
 from radiosity_addon.core import LightmapSettings, SolveSettings, bake_lightmaps, solve
 from radiosity_addon.core.scene.face_clusters import cluster_faces
+from radiosity_addon.core.scene.topology import connected_labels
 from scenes import grid_triangles, sphere_triangles, triangle_scene
 
 SQUARE_UV = [[0, 0], [1, 0], [1, 1], [0, 1]]
@@ -124,3 +125,29 @@ def test_a_subdivided_floor_bakes_like_the_floor_it_came_from(gpu, quality):
     # rectangles' elements instead of the quad's patch lattices (measured: 1.5 % draft, 0.6 % final)
     assert np.sqrt((difference ** 2).mean() / (whole[..., :3][inside] ** 2).mean()) < 0.025
     assert np.abs(difference).max() < 0.12 * whole[..., :3][inside].mean()
+
+
+def union_find_labels(count: int, pairs: np.ndarray) -> np.ndarray:
+    """Smallest node per component by a plain union-find: the independent check."""
+    parent = list(range(count))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+    for a, b in pairs:
+        ra, rb = root(int(a)), root(int(b))
+        parent[max(ra, rb)] = min(ra, rb)
+    return np.array([root(i) for i in range(count)])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_connected_components_match_a_union_find(seed):
+    rng = np.random.default_rng(seed)
+    count = int(rng.integers(50, 400))
+    pairs = rng.integers(0, count, size=(int(rng.integers(0, count)), 2))
+    # a long path too: components whose diameter is far beyond the number of rounds
+    path = np.stack([np.arange(count - 1), np.arange(1, count)], axis=1)[rng.random(count - 1) < 0.9]
+    pairs = np.concatenate([pairs, path[rng.permutation(len(path))]])
+    assert np.array_equal(connected_labels(count, pairs), union_find_labels(count, pairs))

@@ -36,7 +36,7 @@ import numpy as np
 from .geometry import tangent_axes
 from .model import Scene
 from .rows import row_labels
-from .topology import QUANTUM, _labels
+from .topology import QUANTUM, connected_labels
 
 MERGE_SIZE = 1.0  # faces whose longest edge is under this fraction of the patch size may be merged
 CREASE_DEGREES = 60.0  # adjacent faces bent further apart than this belong to different regions
@@ -96,11 +96,11 @@ def cluster_faces(scene: Scene, patch_size: float, subdiv: int | None = None) ->
     faces = np.flatnonzero(candidate)
     kind = _kinds(scene, faces)
     pairs, smooth = _adjacent_pairs(scene, faces, kind)
-    regions = _labels(len(faces), pairs[smooth]) if smooth.any() else np.arange(len(faces))
+    regions = connected_labels(len(faces), pairs[smooth]) if smooth.any() else np.arange(len(faces))
     label = _split(scene, faces, _compact(regions), patch_size)
     # each cluster's connected pieces apart (a slice through a U gives two)
     same = smooth & (label[pairs[:, 0]] == label[pairs[:, 1]])
-    pieces = _labels(len(faces), pairs[same]) if same.any() else np.arange(len(faces))
+    pieces = connected_labels(len(faces), pairs[same]) if same.any() else np.arange(len(faces))
     label = _compact(label.astype(np.int64) * len(faces) + pieces)
     label = _absorb_small(scene, faces, label, pairs, patch_size)
     sizes = np.bincount(label)

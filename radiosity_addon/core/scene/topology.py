@@ -41,22 +41,30 @@ def _directed_edges(scene: Scene):
     return np.stack([start[keep], end[keep]], axis=1), surface[keep]
 
 
-def _labels(count: int, pairs: np.ndarray) -> np.ndarray:
-    """Connected components of `count` nodes joined by `pairs` (M, 2): smallest index per component."""
+def connected_labels(count: int, pairs: np.ndarray) -> np.ndarray:
+    """Connected components of `count` nodes joined by `pairs` (M, 2): smallest index per component.
+    Each round every tree hooks its root under the smallest root it meets across an edge, then
+    every node jumps to its root: trees merge whole, so the rounds follow the log of the
+    components' sizes, not their diameters (a 100k-triangle floor is 300 edges across)."""
     label = np.arange(count)
-    while True:
-        low = np.minimum(label[pairs[:, 0]], label[pairs[:, 1]])
-        updated = label.copy()
-        np.minimum.at(updated, pairs[:, 0], low)
-        np.minimum.at(updated, pairs[:, 1], low)
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    while len(pairs):
+        a, b = label[pairs[:, 0]], label[pairs[:, 1]]
+        apart = a != b
+        if not apart.any():
+            break
+        pairs, a, b = pairs[apart], a[apart], b[apart]
+        high, low = np.maximum(a, b), np.minimum(a, b)
+        order = np.lexsort((low, high))
+        high, low = high[order], low[order]
+        first = np.concatenate([[True], high[1:] != high[:-1]])  # the smallest root each root meets
+        label[high[first]] = np.minimum(label[high[first]], low[first])
         while True:  # pointer jumping: every node straight to its root
-            jumped = updated[updated]
-            if np.array_equal(jumped, updated):
+            jumped = label[label]
+            if np.array_equal(jumped, label):
                 break
-            updated = jumped
-        if np.array_equal(updated, label):
-            return label
-        label = updated
+            label = jumped
+    return label
 
 
 def components(scene: Scene) -> Components:
@@ -67,7 +75,7 @@ def components(scene: Scene) -> Components:
     # surfaces sharing an edge are joined: pair each use with the edge's first user
     first_user = np.full(len(uses), -1)
     first_user[edge_id[::-1]] = owner[::-1]
-    label = _labels(len(scene), np.stack([owner, first_user[edge_id]], axis=1))
+    label = connected_labels(len(scene), np.stack([owner, first_user[edge_id]], axis=1))
     _, label = np.unique(label, return_inverse=True)
     count = int(label.max()) + 1
     # consistently oriented and closed: each undirected edge used twice, once each way
