@@ -32,6 +32,22 @@ def test_a_plan_reports_the_predicted_share_done_and_the_rest_scaled_by_the_stag
     assert calls[-1][2]["eta"] == 7.0 and calls[-1][2]["stage_eta"] == 7.0
 
 
+def test_stages_predicted_in_milliseconds_do_not_scale_the_rest_and_a_stage_that_estimates_itself_is_waited_for():
+    calls = []
+    plan = StagePlan(lambda fraction, message, details: calls.append(details), {"tiny": 0.001, "shots": 70.0,
+                                                                                 "after": 2.0})
+    with plan.stage("tiny", "a call's overhead"):
+        time.sleep(0.1)  # a hundred times its prediction: no evidence of this machine's speed
+    assert plan.speed == 1.0
+    with plan.stage("shots", "shooting", estimates_itself=True):
+        plan.report(0.3, "shot 32")  # a cost model's 70 s is not shown: the time left is not known yet
+        assert calls[-1]["eta"] is None and calls[-1]["stage"] == "shots"
+        plan.report(0.6, "shot 512", {"eta": 9.0})
+        assert calls[-1]["eta"] == pytest.approx(9.0 + 2.0)
+        plan.report(0.7, "shot 544")  # once it has estimated, a report without one falls back on the plan
+        assert calls[-1]["eta"] is not None
+
+
 def test_a_long_loop_pulses_the_running_stage_by_the_time_gone():
     calls = []
     plan = StagePlan(lambda fraction, message, details: calls.append(fraction), {"long": 10.0})

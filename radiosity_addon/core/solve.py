@@ -72,7 +72,8 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
             settings = replace(settings, method=choice.method)
         plan.predict("method", choice.predicted[settings.method]["seconds"])
         choice = choice if asked_auto else None
-        with plan.stage("method", f"solving {len(patches)} patches ({settings.method})"):
+        with plan.stage("method", f"solving {len(patches)} patches ({settings.method})",
+                        estimates_itself=settings.method == "progressive"):
             result = _solve_patches(solve_gpu, scene, patches, settings, effects, timer, plan.within(),
                                     should_cancel, preview, preview_interval, measured, clusters)
     radiosity, elements, light, element_light, direct, element_direct, element_sky, details = result

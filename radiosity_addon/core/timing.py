@@ -34,6 +34,7 @@ def scaled_progress(progress: ProgressCallback | None, start: float, end: float)
 
 
 SPEED_LIMITS = (0.25, 4.0)  # how far the stages done may scale the prediction of those ahead
+SPEED_EVIDENCE = 0.5  # predicted seconds of stages done before their speed scales those ahead
 PULSE_INTERVAL = 0.5  # seconds between the reports `pulse` makes at most
 PULSE_SHARE = 0.95  # of a stage's predicted time, the most a pulse says is done
 
@@ -67,6 +68,7 @@ class StagePlan:
         self.last_report = 0.0
         self.last_message = ""
         self.shown = 0.0  # the fraction reported last: never less after (a prediction set again may lower it)
+        self.waiting = False  # the running stage estimates itself and has not yet
 
     def predict(self, name: str, seconds: float) -> None:
         if name not in self.done:
@@ -77,11 +79,17 @@ class StagePlan:
         """Seconds taken per second predicted, by the stages done (1 before any)."""
         taken = sum(self.done.values())
         expected = sum(self.predicted[name] for name in self.done)
-        return 1.0 if expected <= 0 or taken <= 0 else min(max(taken / expected, SPEED_LIMITS[0]), SPEED_LIMITS[1])
+        # stages predicted in milliseconds take what a call costs whatever their size: no evidence
+        if expected < SPEED_EVIDENCE or taken <= 0:
+            return 1.0
+        return min(max(taken / expected, SPEED_LIMITS[0]), SPEED_LIMITS[1])
 
     @contextlib.contextmanager
-    def stage(self, name: str, message: str):
+    def stage(self, name: str, message: str, estimates_itself: bool = False):
+        """A stage that `estimates_itself` (progressive refinement's shots) reports no time left until
+        it gives its own: its prediction is a cost model's, and a bar set by it would mislead."""
         self.current, self.current_started = name, time.perf_counter()
+        self.waiting = estimates_itself
         self.report(0.0, message)
         token = _pulse.set(self._beat)
         try:
@@ -115,6 +123,11 @@ class StagePlan:
                     if name not in self.done and name != self.current)
         fraction = min(max(float(fraction), 0.0), 1.0)
         own = details.get("eta")
+        self.waiting = self.waiting and own is None
+        if self.waiting:
+            details["eta"], details["stage"] = None, self.current
+            self.progress(self.shown, message, details)
+            return
         if own is None:
             elapsed = time.perf_counter() - self.current_started
             own = max(mine * self.speed - elapsed, (1.0 - fraction) * mine * self.speed)

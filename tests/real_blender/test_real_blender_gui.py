@@ -71,6 +71,8 @@ def test_the_ui_stays_responsive_during_a_bake(session):
     assert ui["timer_ticks"] > 15 * ui["seconds"], ui  # 20 asked per second
     # the add-on's own work in each modal tick (the child's news, progress, status): ~0.2 ms measured
     assert bake["tick_work"]["ticks"] > 5 * ui["seconds"] and bake["tick_work"]["max"] <= MAX_TICK_WORK, bake["tick_work"]
+    # the preparation runs a step a tick (an object exported, a Cycles pass): each within the UI's gap
+    assert bake["preparation_steps"]["ticks"] >= 1 and bake["preparation_steps"]["max"] <= MAX_UI_GAP, bake
     # while the solver runs: at most MAX_UI_GAP, or IDLE_MARGIN over the idle UI's longest gap
     # where Blender's own loop pauses longer with no bake (0.15-0.2 s measured under Xvfb)
     running = bake["ui_running"]

@@ -74,7 +74,7 @@ def label_fits(text: str, margin: float) -> dict:
 
 
 def drawn_texts(bake) -> list:
-    clock = bake.plan.worker.clock
+    clock = bake.worker_clock
     panel = rig.addon("blender.panel")
     return [label_fits(clock.bar_text(), 30), label_fits(panel.sentence(clock.stage), panel.LABEL_MARGIN),
             label_fits("Esc cancels", panel.LABEL_MARGIN)]
@@ -100,19 +100,34 @@ def watched_bake(name: str, screenshots: bool):
     before = rig.file_state()
     invoked, started = invoke_bake(), time.monotonic()
     bake = ui_bake().running
-    samples, previews, shot_at = [], [], []
-    take_preview = bake.plan.worker.take_preview
+    samples, previews, shot_at, counted = [], [], [], []
 
-    def counting():
-        images = take_preview()
-        if images is not None:
-            previews.append(round(time.monotonic() - started, 2))
-        return images
-    bake.plan.worker.take_preview = counting
-    ticks: list[float] = []  # the add-on's own main-thread time per modal tick
+    def count_previews(worker):
+        take_preview = worker.take_preview
+
+        def counting():
+            images = take_preview()
+            if images is not None:
+                previews.append(round(time.monotonic() - started, 2))
+            return images
+        worker.take_preview = counting
+        counted.append(worker)
+    # the add-on's own main-thread time per modal tick, apart for the ticks that step the preparation
+    # (export, Cycles' passes, and the last one, which starts the solver) from those that take the solve's news
+    ticks: list[float] = []
+    preparing: list[bool] = []
+    advance = ui_bake().advance
     untimed = rig.timed_calls(ui_bake(), "advance", ticks)
+    timed = ui_bake().advance
+
+    def advance_noted(running, *args, **kwargs):
+        preparing.append(running.plan is None)
+        return timed(running, *args, **kwargs)
+    ui_bake().advance = advance_noted
     while ui_bake().running is bake:
-        clock = bake.plan.worker.clock
+        if bake.plan is not None and not counted:  # the preparation (export, Cycles' passes) is over
+            count_previews(bake.plan.worker)
+        clock = bake.worker_clock
         samples.append((round(time.monotonic() - started, 2), round(clock.fraction(), 3), clock.bar_text(),
                         clock.stage))
         if screenshots and previews and not shot_at and samples[-1][0] > previews[0] + 1.5:
@@ -123,6 +138,7 @@ def watched_bake(name: str, screenshots: bool):
                 rig.shot(shot, kind)
         yield 0.1
     untimed()
+    ui_bake().advance = advance
     yield 0.3
     ended = time.monotonic()
     solving = started + samples[-1][0]  # the last tick before the result is applied
@@ -137,7 +153,12 @@ def watched_bake(name: str, screenshots: bool):
                      "long_gaps": recorder.long_gaps(started, ended), "idle_ui": recorder.stats(started - 2.0, started),
                      "images": sorted(i.name for i in bpy.data.images),
                      "last_bake": bpy.context.scene.radiosity.last_bake,
-                     "tick_work": {"ticks": len(ticks), "max": round(max(ticks), 4) if ticks else None}}
+                     "tick_work": tick_work([t for t, p in zip(ticks, preparing) if not p]),
+                     "preparation_steps": tick_work([t for t, p in zip(ticks, preparing) if p])}
+
+
+def tick_work(ticks: list[float]) -> dict:
+    return {"ticks": len(ticks), "max": round(max(ticks), 4) if ticks else None}
 
 
 def case_responsive():
@@ -207,8 +228,8 @@ def interrupted(name: str, action, wait_for_preview: bool = False, compare_with:
     invoke_bake()
     module = ui_bake()
     bake = module.running
-    yield from rig.wait_until(lambda: bake.plan.preview is not None if wait_for_preview
-                              else bake.plan.worker.clock.total is not None, 60)
+    yield from rig.wait_until(lambda: bake.plan is not None and (
+        bake.plan.preview is not None if wait_for_preview else bake.plan.worker.clock.total is not None), 60)
     record = {"progress_before": round(bake.plan.worker.clock.fraction(), 3),
               "preview_shown": bake.plan.preview is not None}
     cancel, cancelled_at = bake.plan.worker.cancel, []
@@ -285,7 +306,7 @@ def case_disable():
 def case_quit():
     invoke_bake()
     bake = ui_bake().running
-    yield from rig.wait_until(lambda: bake.plan.worker.clock.total is not None, 60)
+    yield from rig.wait_until(lambda: bake.plan is not None and bake.plan.worker.clock.total is not None, 60)
     results["quit"] = {"child_pid": bake.plan.worker._process.pid, "job_folder": str(bake.plan.worker.directory)}
     rig.quit_blender()
     yield 10.0
