@@ -9,7 +9,7 @@ RIG := tools/blender_rig.sh
 RIG_5_2 ?= /var/cache/blender-rig
 RIG_4_3 ?= /var/cache/blender-rig-trixie
 
-.PHONY: setup check-system demo test test-blender rigs bench bench-quick extension samples clean
+.PHONY: setup check-system demo test test-blender rigs bench bench-quick bench-production extension samples clean
 
 setup: check-system $(STAMP)
 
@@ -69,6 +69,30 @@ bench: setup
 
 bench-quick: setup
 	$(PY) -m radiosity_addon bench --quick --output-dir $(OUT)/bench-quick
+
+# the production terrace (dense meshes, 20 materials in one object, a triangle soup, alpha-cut
+# leaves, sun and sky; radiosity_addon/bench/production.py) on a quiet machine, ~1 h: how each stage
+# grows from 50k to 500k triangles (10 objects; then 300k as one object and as 30) and the presets
+# against Cycles at 50k, with pictures; the tables, plots and pictures go to docs/bench/production/
+PRODUCTION_DOCS := docs/bench/production
+bench-production: setup
+	mkdir -p $(PRODUCTION_DOCS)
+	$(PY) tools/measure_scaling.py --family production --triangles 50000 100000 200000 300000 500000 \
+	  --quality draft --cycles 16 --output-dir $(OUT)/scaling-production
+	$(PY) tools/measure_scaling.py --family production --objects 1 --triangles 300000 --quality draft \
+	  --cycles 16 --output-dir $(OUT)/scaling-production-one
+	$(PY) tools/measure_scaling.py --family production --objects 30 --triangles 300000 --quality draft \
+	  --cycles 16 --output-dir $(OUT)/scaling-production-30
+	$(PY) -m radiosity_addon.bench.production --triangles 50000 --output $(OUT)/production/p50k.blend
+	$(PY) tools/measure_presets.py $(OUT)/production/p50k.blend --output-dir $(OUT)/presets-production \
+	  --runs '{"quality": "draft"}' '{"quality": "good"}' '{"quality": "final"}' --reference 256 --cycles 16 64 \
+	  --pictures $(OUT)/presets-production/pictures
+	cp $(OUT)/scaling-production/scaling.md $(PRODUCTION_DOCS)/scaling.md
+	cp $(OUT)/scaling-production/scaling.png $(PRODUCTION_DOCS)/scaling.png
+	{ cat $(OUT)/scaling-production-one/scaling.md; tail -n +3 $(OUT)/scaling-production-30/scaling.md; } > $(PRODUCTION_DOCS)/objects.md
+	cp $(OUT)/presets-production/presets.md $(OUT)/presets-production/presets.png $(PRODUCTION_DOCS)/
+	mkdir -p $(PRODUCTION_DOCS)/pictures
+	cp $(OUT)/presets-production/pictures/good_*.png $(PRODUCTION_DOCS)/pictures/
 
 clean:
 	rm -rf $(OUT) dist build .pytest_cache

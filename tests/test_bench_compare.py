@@ -135,3 +135,27 @@ def test_cycles_to_reach_interpolates_between_the_rows_that_bracket_the_error():
 def test_without_reference_noise_takes_the_noise_out_of_the_squared_error():
     assert compare.without_reference_noise(0.05, 0.014) == pytest.approx((0.05 ** 2 - 0.014 ** 2) ** 0.5)
     assert compare.without_reference_noise(0.01, 0.014) == 0.0
+
+
+def test_pictures_show_ours_cycles_and_the_signed_difference(tmp_path):
+    from radiosity_addon.bench import pictures
+    reference = np.ones((8, 16, 4))
+    reference[..., :3] = 0.5
+    ours = reference.copy()
+    ours[:, :4, :3] = 0.75  # +50 %: full red
+    ours[:, 4:8, :3] = 0.25  # -50 %: full blue
+    ours[0, :, 3] = 0.0  # not covered (our bottom row): black in every panel
+    picture = pictures.side_by_side(ours, reference)
+    scale = 256 // 16
+    assert picture.shape == (8 * scale, 3 * 16 * scale + 2 * pictures.GAP, 3)
+    third = 16 * scale + pictures.GAP
+    difference = picture[:, 2 * third:]
+    top = 0  # Blender's row 7, the top of the picture
+    assert tuple(difference[top, 0]) == (230, 40, 30) and tuple(difference[top, 5 * scale]) == (30, 80, 230)
+    assert tuple(difference[top, 10 * scale]) == (128, 128, 128)
+    panels = np.concatenate([picture[-1, k * third:k * third + 16 * scale] for k in range(3)])
+    assert not panels.any()  # row 0 of the lightmaps, uncovered, is the picture's last row
+    # one exposure: the reference's 99th percentile is white, ours as bright there
+    assert tuple(picture[top, third + 10 * scale]) == (255, 255, 255) == tuple(picture[top, 10 * scale])
+    written = pictures.write_pictures(tmp_path, "good_", {"Floor Tiles": ours}, {"Floor Tiles": reference})
+    assert [path.name for path in written] == ["good_Floor_Tiles.png"] and written[0].read_bytes()[:4] == b"\x89PNG"

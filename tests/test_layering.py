@@ -30,7 +30,7 @@ ALLOWED = {
     "settings": {"errors"},
     "imaging": set(),
     "gpu": {"errors"},
-    "scene": {"errors", "settings"},
+    "scene": {"errors", "settings", "timing"},
     "visibility": BASE | {"gpu", "scene"},
     "shooting": BASE | {"gpu", "imaging", "scene", "visibility"},
     "uvspace": BASE | {"gpu", "scene"},

@@ -26,9 +26,10 @@ samples), the samples and seconds Cycles needs for each run's texel RMS and for 
 (5 %), and each run's seconds against half the latter — the Cornell box's target, "the bar" — first
 against the reference as it is, then against a converged one (every texel RMS with the reference's
 noise taken out); `--reprint` prints them again from DIR/presets.json.
-`--densities` then times the
+`--pictures` writes each run's lightmaps beside the reference's (bench/pictures.py). `--densities` then times the
 first run and Cycles at the first `--cycles` samples at other texel densities. Writes
-DIR/presets.json and DIR/presets.png (error against time; `--replot` redraws it from the json).
+DIR/presets.json, DIR/presets.md (the table docs/bench/ shows) and DIR/presets.png (error against
+time); `--replot` redraws both from the json.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 from mathutils import Vector  # noqa: E402
 
-from radiosity_addon.bench import blend_lightmaps, blend_reference, compare, foliage  # noqa: E402
+from radiosity_addon.bench import blend_lightmaps, blend_reference, compare, foliage, pictures  # noqa: E402
 from radiosity_addon.bench.production import PRODUCTION_PROPERTY  # noqa: E402
 from radiosity_addon.bench.rooms import ROOM_PROPERTY  # noqa: E402
 from radiosity_addon.blender import worker  # noqa: E402
@@ -148,6 +149,31 @@ def plot(path: Path, record: dict) -> None:
     figure.savefig(path, dpi=110)
 
 
+def table(record: dict) -> str:
+    """DIR/presets.md: one row per run and Cycles row of `record`, what docs/bench/ shows."""
+    lines = [f"{Path(record['file']).name}, against Cycles at {record['reference']['samples_per_seed']} samples"
+             f" x 2 seeds (its noise {100 * record['reference']['noise']:.1f} %)", "",
+             "| run | method | patches | seconds | texel RMS | object-balanced (noise out) | worst object mean"
+             " | canopy shadow mean / texel RMS | Cycles to the same error |",
+             "|---|---|---:|---:|---:|---:|---|---:|---|"]
+    for entry in record["runs"]:
+        leaves, same = entry.get("foliage"), entry.get("cycles_to_same_error")
+        shadow = "" if leaves is None else \
+            f"{100 * (leaves['shadow_mean_ratio'] - 1):+.1f} % / {100 * leaves['pattern_rms']:.1f} %"
+        cycles = "" if same is None else f"{same['samples']:.0f} samples, {same['seconds']:.1f} s"
+        lines.append(
+            f"| {entry['label']} | {entry['method']} | {entry.get('patches') or ''} | {entry['seconds']:.1f} "
+            f"| {100 * entry['texel_rms']:.1f} % | {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) "
+            f"| {entry['worst_object']} {100 * entry['worst_object_error']:+.0f} % | {shadow} | {cycles} |")
+    return "\n".join(lines) + "\n"
+
+
+def write_results(out: Path, record: dict) -> None:
+    (out / "presets.json").write_text(json.dumps(record, indent=1, default=float))
+    (out / "presets.md").write_text(table(record))
+    plot(out / "presets.png", record)
+
+
 def print_cycles_equivalents(record: dict, target_error: float) -> None:
     """What Cycles needs to reach each run's texel RMS and `target_error` (`compare.cycles_to_reach`,
     between its rows of this run), and each run's seconds against half the latter: the bar. Then
@@ -196,13 +222,16 @@ def main() -> int:
     parser.add_argument("--target-error", type=float, default=0.05,
                         help="texel RMS for the bar: the seconds Cycles needs to reach it, interpolated between its"
                              " rows, and each run's seconds against half of them (the Cornell box's target)")
-    parser.add_argument("--replot", action="store_true", help="only redraw DIR/presets.png from DIR/presets.json")
+    parser.add_argument("--pictures", type=Path, metavar="PICTURES_DIR",
+                        help="write each run's lightmaps beside the reference's and their difference there"
+                             " (bench/pictures.py: PICTURES_DIR/<run>_<object>.png)")
+    parser.add_argument("--replot", action="store_true", help="only redraw DIR/presets.png and .md from DIR/presets.json")
     parser.add_argument("--reprint", action="store_true",
                         help="only print the bar and what Cycles needs for each run from DIR/presets.json")
     args = parser.parse_args()
     out = args.output_dir
     if args.replot:
-        plot(out / "presets.png", json.loads((out / "presets.json").read_text()))
+        write_results(out, json.loads((out / "presets.json").read_text()))
         return 0
     if args.reprint:
         print_cycles_equivalents(json.loads((out / "presets.json").read_text()), args.target_error)
@@ -281,6 +310,11 @@ def main() -> int:
         print(f"| {entry['label']} | {entry['method']} | {entry.get('patches', '')} | {entry['seconds']:.1f} "
               f"| {100 * entry['texel_rms']:.1f} % / {100 * entry['texel_rms_inside']:.1f} % "
               f"| {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) | {worst} {100 * error:+.0f} % |", flush=True)
+    if args.pictures is not None:
+        for entry, images in rows:
+            if entry["method"] != "cycles":
+                prefix = "".join(c if c.isalnum() else "-" for c in entry["label"].split("=")[-1]) + "_"
+                pictures.write_pictures(args.pictures, prefix, images, reference["images"])
     shadow = canopy_shadow(positions)
     if shadow is not None:  # the production terrace: the dappled floor under the canopy
         for entry, images in rows:
@@ -291,9 +325,8 @@ def main() -> int:
     print_cycles_equivalents(record, args.target_error)
     if args.densities:
         record["densities"] = density_sweep(path, json.loads(args.runs[0]), args.cycles[0], args.densities, out)
-    (out / "presets.json").write_text(json.dumps(record, indent=1, default=float))
-    plot(out / "presets.png", record)
-    log(f"wrote {out / 'presets.json'} and presets.png")
+    write_results(out, record)
+    log(f"wrote {out / 'presets.json'}, presets.md and presets.png")
     return 0
 
 

@@ -12,8 +12,9 @@ stage as the add-on does (radiosity_addon/bench/scaling.py: export, material map
 solve's stages, lightmaps, write-back), each stage's seconds and peak resident memory recorded.
 After each room's first bake, Cycles bakes the same room (built again, saved in DIR) into
 lightmaps of the same sizes at `--cycles` samples per texel, in a process of its own (0: not).
-Writes DIR/scaling.json, and DIR/scaling.png (seconds and peak memory per stage against
-triangles, log-log, with Cycles' whole bake).
+Writes DIR/scaling.json, DIR/scaling.png (seconds and peak memory per stage against
+triangles, log-log, with Cycles' whole bake) and DIR/scaling.md (the same as a table: what
+docs/bench/ shows; `--replot` redraws both from the json).
 """
 
 from __future__ import annotations
@@ -74,6 +75,34 @@ def plot(path: Path, runs: list[dict]) -> None:
     figure.savefig(path, dpi=110)
 
 
+def table(runs: list[dict]) -> str:
+    """A markdown table of `runs`: per scene the size of its solve, our bake's seconds and peak
+    memory, its slowest stages, and Cycles' bake of the same lightmaps."""
+    cycles = {run["triangles_target"]: run for run in runs if run["method_asked"].startswith("cycles")}
+    lines = ["| triangles | objects | patches | texels | seconds | peak MiB | slowest stages (s) | job MB | Cycles |",
+             "|---:|---:|---:|---:|---:|---:|---|---:|---|"]
+    for run in runs:
+        if run["method_asked"].startswith("cycles"):
+            continue
+        if "stage_seconds" not in run:
+            lines.append(f"| {run['triangles_target']} | | | | failed: {run.get('failed')} | | | | |")
+            continue
+        stages = sorted(run["stage_seconds"].items(), key=lambda item: -item[1])[:3]
+        other = cycles.get(run["triangles_target"], {})
+        versus = (f"{other['seconds']:.1f} s, {other['peak_mb']:.0f} MiB ({other['method_asked']})"
+                  if "seconds" in other else "")
+        lines.append(f"| {run['triangles']} | {run.get('objects', '')} | {run['patches']} | {run['texels']} | "
+                     f"{run['seconds']:.1f} | {max(run['stage_peak_mb'].values()):.0f} | "
+                     + ", ".join(f"{name} {seconds:.1f}" for name, seconds in stages)
+                     + f" | {run.get('job_mb', 0):.0f} | {versus} |")
+    return "\n".join(lines) + "\n"
+
+
+def write_results(out: Path, runs: list[dict]) -> None:
+    plot(out / "scaling.png", runs)
+    (out / "scaling.md").write_text(table(runs))
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--output-dir", type=Path, required=True)
@@ -87,10 +116,10 @@ def main() -> int:
     parser.add_argument("--objects", type=int, default=10, help="production: about how many objects (1: one)")
     parser.add_argument("--one", nargs=2, metavar=("TRIANGLES", "METHOD"), help=argparse.SUPPRESS)
     parser.add_argument("--one-cycles", nargs=2, metavar=("TRIANGLES", "SIZES"), help=argparse.SUPPRESS)
-    parser.add_argument("--replot", action="store_true", help="only redraw DIR/scaling.png from DIR/scaling.json")
+    parser.add_argument("--replot", action="store_true", help="only redraw DIR/scaling.png and .md from DIR/scaling.json")
     args = parser.parse_args()
     if args.replot:
-        plot(args.output_dir / "scaling.png", json.loads((args.output_dir / "scaling.json").read_text()))
+        write_results(args.output_dir, json.loads((args.output_dir / "scaling.json").read_text()))
         return 0
     if args.one:
         from radiosity_addon.bench.scaling import bake_production_in_stages, bake_room_in_stages
@@ -133,7 +162,7 @@ def main() -> int:
                 sizes = out / f"sizes_{triangles}.json"
                 sizes.write_text(json.dumps(run["sizes"]))
                 run_one(triangles, f"cycles {args.cycles} spp", base + ["--one-cycles", str(triangles), str(sizes)])
-    plot(out / "scaling.png", runs)
+    write_results(out, runs)
     return 0
 
 

@@ -72,6 +72,7 @@ render_preview(scene, lightmaps, camera=None, width=512, height=512, supersample
     -> Preview         the scene from `camera` (default: the scene's own, else one that frames
                        it), lit only by the lightmaps, trilinearly filtered.
 save_preview(path, scene, preview, exposure=None) -> exposure   tone-mapped 8-bit PNG.
+tone_map(radiance, exposure) -> uint8 sRGB; write_png(path, rgb uint8 (H, W, 3), row 0 at the top).
 
 Building blocks (the benchmark's Table 5.1 and exact references)
 -----------------------------------------------------------------
@@ -94,7 +95,7 @@ from .gpu import GPU, open_gpu
 from .hemicube import form_factor_matrix, point_to_polygon, solve_linear
 from .hemicube.linear_solvers import Convergence
 from .lightmap import Lightmap, bake_lightmaps, lightmap_seconds, lightmap_sizes
-from .preview import Camera, Preview, render_preview, save_preview
+from .preview import Camera, Preview, render_preview, save_preview, tone_map, write_png
 from .report import Report
 from .scene.geometry import bilinear
 from .scene import (MAX_REFLECTANCE, FaceNames, MaterialMap, OpacityMaps, Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
@@ -113,6 +114,6 @@ __all__ = [
     "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "StageTimer", "Surface", "TEXEL_DENSITY",
     "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",
     "form_factor_matrix", "lightmap_seconds", "lightmap_sizes", "polygon_faults",
-    "load_scene", "open_gpu", "point_to_polygon", "render_preview", "save_preview", "save_scene",
+    "load_scene", "open_gpu", "point_to_polygon", "render_preview", "save_preview", "save_scene", "tone_map", "write_png",
     "scene_from_dict", "solve", "solve_linear", "subdivide", "surfaces_with_material_maps",
 ]

@@ -33,7 +33,7 @@ from ..timing import StagePlan, pulse
 from ..uvspace import rasterize
 from . import charts
 from .contact import contact_distance, in_contact, touching_clusters
-from .direct import (direct_light, emitters_reflection, footprint_points, map_resolutions,
+from .direct import (SUN_DISC_DIRECTIONS, direct_light, emitters_reflection, footprint_points, map_resolutions,
                      reflected_light_at_elements, sharp_texels, sky_light, texel_axes, texel_points)
 from .lattice import continuous_lattice, element_values, lattice_parameters
 from .mips import filled_image, mip_levels
@@ -172,8 +172,8 @@ class ObjectTexels:
         return self.unit_patch[self.unit_of_texel[self.covered]]
 
 
-LIGHTMAP_SECONDS = {"texel": 1.5e-6, "face": 1.2e-5,  # measured on the production terrace (2 cores, llvmpipe)
-                    "texel_sky_direction": 3.7e-8}
+# per texel, per face, per face and direction of a sun (its maps draw every face), per texel and sky direction
+LIGHTMAP_SECONDS = {"texel": 1.5e-6, "face": 1.2e-5, "face_sun_direction": 2.9e-6, "texel_sky_direction": 3.7e-8}
 
 
 def predicted_seconds(scene: Scene, sizes: dict, settings: LightmapSettings | None = None) -> float:
@@ -182,8 +182,9 @@ def predicted_seconds(scene: Scene, sizes: dict, settings: LightmapSettings | No
     where it is recomputed per texel) and the faces laid out and drawn."""
     texels = sum(width * height for width, height in sizes.values())
     directions = settings.sky_directions if settings is not None and np.any(scene.world_color > 0) else 0
+    sun_directions = sum(SUN_DISC_DIRECTIONS if lamp.angle > 0 else 1 for lamp in scene.lamps if lamp.type == "sun")
     return (LIGHTMAP_SECONDS["texel"] + LIGHTMAP_SECONDS["texel_sky_direction"] * directions) * texels \
-        + LIGHTMAP_SECONDS["face"] * len(scene)
+        + (LIGHTMAP_SECONDS["face"] + LIGHTMAP_SECONDS["face_sun_direction"] * sun_directions) * len(scene)
 
 
 def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings | None = None,
@@ -295,6 +296,7 @@ def _bake(scene: Scene, solution: Solution, settings: LightmapSettings, gpu: GPU
                        1.0 / settings.texel_density)
     lightmaps = {}
     for name, entry in texels.items():
+        pulse()
         size, indices = layouts.sizes[name], objects[name]
         texel_values = entry.values
         material = scene.material_maps.get(name)
@@ -323,8 +325,7 @@ def _bake(scene: Scene, solution: Solution, settings: LightmapSettings, gpu: GPU
 
 
 def _holds_b(mapped: np.ndarray, faces: Scene, scene: Scene):
-    """Per patch whether its texels hold the interpolated B (no material map makes B from H), and
-    per face the same for clustered faces' texels."""
+    """Per patch and per face (clustered faces' texels): do its texels hold the interpolated B?"""
     mapped_faces = np.isin(np.asarray(faces.object_names)[faces.object_index], list(scene.material_maps))
     return ~mapped, ~mapped_faces
 

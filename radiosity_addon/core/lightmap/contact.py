@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene import Scene
+from ..timing import pulse
 from ..scene.neighbours import near_pairs, range_chunks
 
 CONTACT_DISTANCE = 1e-4  # planes closer than this (times the scene's diameter) touch
@@ -113,6 +114,7 @@ def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray, candidate
         return owner + np.clip((coordinate - origin[owner]) / scale[owner], 0.0, 1.0 - 1e-9)
 
     point_keys = keys(surfaces, np.take_along_axis(points, axis[surfaces][:, None], 1)[:, 0])
+    pulse()
     order = np.argsort(point_keys, kind="stable")
     sorted_keys = point_keys[order]
     along = axis[touched]
@@ -121,6 +123,7 @@ def in_contact(scene: Scene, points: np.ndarray, surfaces: np.ndarray, candidate
     start = np.searchsorted(sorted_keys, keys(touched, partner_low), side="left")
     count = np.searchsorted(sorted_keys, keys(touched, partner_high), side="right") - start
     for pair, at in range_chunks(start, count, POINT_CHUNK):
+        pulse()
         point = order[at]
         hit = inside_polygons(points[point], scene.corners[partner[pair]], scene.normal[partner[pair]], edge)
         covered[point[hit]] = True

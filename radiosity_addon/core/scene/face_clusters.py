@@ -33,6 +33,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..timing import pulse
 from .geometry import tangent_axes
 from .model import Scene
 from .rows import row_labels
@@ -96,6 +97,7 @@ def cluster_faces(scene: Scene, patch_size: float, subdiv: int | None = None) ->
     faces = np.flatnonzero(candidate)
     kind = _kinds(scene, faces)
     pairs, smooth = _adjacent_pairs(scene, faces, kind)
+    pulse()
     regions = connected_labels(len(faces), pairs[smooth]) if smooth.any() else np.arange(len(faces))
     label = _split(scene, faces, _compact(regions), patch_size)
     # each cluster's connected pieces apart (a slice through a U gives two)
@@ -224,6 +226,7 @@ def _split(scene: Scene, faces: np.ndarray, label: np.ndarray, patch_size: float
     label = label.astype(np.int64).copy()
     active = np.arange(len(faces))
     for _ in range(MAX_ROUNDS):
+        pulse()
         if len(active) == 0:
             break
         local = _compact(label[active])
@@ -297,6 +300,7 @@ def _absorb_small(scene: Scene, faces: np.ndarray, label: np.ndarray, pairs: np.
     limit = math.cos(math.radians(ABSORB_DEGREES))
     area, normal = scene.area[faces], scene.normal[faces]
     for _ in range(ABSORB_ROUNDS):
+        pulse()
         stats = _ClusterStats(area, normal, label)
         a, b = label[pairs[:, 0]], label[pairs[:, 1]]
         across = a != b

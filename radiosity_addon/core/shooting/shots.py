@@ -235,6 +235,7 @@ def surface_visibility(res: Resources, scene: Scene, patches: Patches, resolutio
     planes = skip_of = None
     if clusters is not None and not clusters.is_identity:
         surfaces = subdivide(clusters.faces, subdiv=1)
+        pulse()  # a dense scene's faces take seconds to lay out and draw
         planes = clusters.proxy_of_face
         skip_of = clusters.face_of_proxy[np.asarray(patches.surface)]  # a cluster's piece leaves nothing out
     else:
