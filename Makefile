@@ -87,6 +87,9 @@ bench-production: setup
 	$(PY) tools/measure_presets.py $(OUT)/production/p50k.blend --output-dir $(OUT)/presets-production \
 	  --runs '{"quality": "draft"}' '{"quality": "good"}' '{"quality": "final"}' --reference 256 --cycles 16 64 \
 	  --pictures $(OUT)/presets-production/pictures
+	$(PY) tools/measure_presets.py $(OUT)/scaling-production/production_300000_10.blend \
+	  --output-dir $(OUT)/presets-production-300k --runs '{"quality": "good"}' --reference 256 --cycles 16 64
+	cp $(OUT)/presets-production-300k/presets.md $(PRODUCTION_DOCS)/presets_300k.md
 	cp $(OUT)/scaling-production/scaling.md $(PRODUCTION_DOCS)/scaling.md
 	cp $(OUT)/scaling-production/scaling.png $(PRODUCTION_DOCS)/scaling.png
 	{ cat $(OUT)/scaling-production-one/scaling.md; tail -n +3 $(OUT)/scaling-production-30/scaling.md; } > $(PRODUCTION_DOCS)/objects.md

@@ -165,6 +165,13 @@ def table(record: dict) -> str:
             f"| {entry['label']} | {entry['method']} | {entry.get('patches') or ''} | {entry['seconds']:.1f} "
             f"| {100 * entry['texel_rms']:.1f} % | {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) "
             f"| {entry['worst_object']} {100 * entry['worst_object_error']:+.0f} % | {shadow} | {cycles} |")
+    named = [entry for entry in record["runs"] if "object_rms" in entry]
+    if named:  # each object's own texel RMS, run by run: a mean can hide a black halo
+        objects = sorted({name for entry in named for name in entry["object_rms"]})
+        lines += ["", "| object | " + " | ".join(entry["label"] for entry in named) + " |",
+                  "|---|" + "---:|" * len(named)]
+        lines += [f"| {name} | " + " | ".join(f"{100 * entry['object_rms'][name]:.1f} %" if name in entry["object_rms"]
+                                              else "" for entry in named) + " |" for name in objects]
     return "\n".join(lines) + "\n"
 
 
@@ -306,7 +313,8 @@ def main() -> int:
         entry.update(texel_rms=result["texel_rms"], texel_rms_inside=result.get("texel_rms_inside", result["texel_rms"]),
                      balanced_rms=result["balanced_rms"], balanced_bias=result["balanced_bias"],
                      worst_object=worst, worst_object_error=error,
-                     objects={name: e["relative_rgb"] for name, e in result["objects"].items()})
+                     objects={name: e["relative_rgb"] for name, e in result["objects"].items()},
+                     object_rms={name: e["rms"] for name, e in result["objects"].items()})
         print(f"| {entry['label']} | {entry['method']} | {entry.get('patches', '')} | {entry['seconds']:.1f} "
               f"| {100 * entry['texel_rms']:.1f} % / {100 * entry['texel_rms_inside']:.1f} % "
               f"| {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) | {worst} {100 * error:+.0f} % |", flush=True)

@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import SceneError, SolveError
+from ..errors import SolveError
 from ..gpu import GPU, open_gpu
 from ..scene import Scene
 from ..scene.face_clusters import identity_clusters
@@ -36,11 +36,11 @@ from .contact import contact_distance, in_contact, touching_clusters
 from .direct import (SUN_DISC_DIRECTIONS, direct_light, emitters_reflection, footprint_points, map_resolutions,
                      reflected_light_at_elements, sharp_texels, sky_light, texel_axes, texel_points)
 from .lattice import continuous_lattice, element_values, lattice_parameters
+from .seams import under_near_emitters
 from .mips import filled_image, mip_levels
 from .scattered import corner_values, element_samples
-from .size import resolve_size
+from .size import given_uvs, resolve_size, uv_polygon_area
 
-UV_TOLERANCE = 1e-3  # how far given UVs may stray outside [0, 1]
 
 
 @dataclass
@@ -69,30 +69,6 @@ class Lightmap:
         """Level 0 with every texel outside the charts filled from coarser levels (for renderers
         that build their own mipmaps, like Blender): float32 (H, W, 4), alpha = coverage."""
         return filled_image(self.levels)
-
-
-def uv_polygon_area(uv: np.ndarray) -> np.ndarray:
-    """(n,) areas of UV polygons (n, 4, 2) (shoelace; a repeated corner adds nothing)."""
-    x, y = uv[..., 0], uv[..., 1]
-    return 0.5 * np.abs((x * np.roll(y, -1, axis=-1) - y * np.roll(x, -1, axis=-1)).sum(axis=-1))
-
-
-def _given_uvs(scene: Scene, name: str, indices: np.ndarray) -> bool:
-    """True if the object's surfaces all carry UVs, False if none do; mixed or out-of-range is an error."""
-    with_uv = scene.has_uv[indices]
-    if not with_uv.any():
-        return False
-    if not with_uv.all():
-        missing = scene.names[indices[np.flatnonzero(~with_uv)[0]]]
-        raise SceneError(f"object '{name}': surface '{missing}' has no lightmap 'uv' but others of the"
-                         " object do; give every surface of an object UVs, or none")
-    uv = scene.uv[indices]
-    outside = np.flatnonzero((uv.min(axis=(1, 2)) < -UV_TOLERANCE) | (uv.max(axis=(1, 2)) > 1 + UV_TOLERANCE))
-    if len(outside):
-        raise SceneError(f"surface '{scene.names[indices[outside[0]]]}': lightmap UVs leave the [0, 1] square")
-    if uv_polygon_area(uv).sum() <= 0:
-        raise SceneError(f"object '{name}': its lightmap UVs have zero area")
-    return True
 
 
 @dataclass
@@ -124,7 +100,7 @@ def plan_layouts(scene: Scene, settings: LightmapSettings, objects=None) -> Layo
     for number, (name, indices) in enumerate(objects.items()):
         layouts.object_of_surface[indices] = number
         override = overrides.get(name)
-        if _given_uvs(scene, name, indices):
+        if given_uvs(scene, name, indices):
             side = settings.texel_density * math.sqrt(scene.area[indices].sum() / uv_polygon_area(scene.uv[indices]).sum())
             layouts.sizes[name] = resolve_size((math.ceil(side),) * 2, override, settings.max_size,
                                                settings.power_of_two, name)
@@ -229,6 +205,7 @@ def _bake(scene: Scene, solution: Solution, settings: LightmapSettings, gpu: GPU
         reflected = emitters_reflection(patches, solution.patch_radiosity)
         if reflected is not None:  # the texels take it from the emitters' pieces too (`add_direct_light`)
             values = values - reflected_light_at_elements(gpu, solution, settings, reflected, values.shape[1])
+        values = np.maximum(values, 0.0)  # what is left of H is light from elsewhere: never below none
     elif light or mapped.any():
         values = element_values(solution, light=True)
         if not light:
@@ -250,9 +227,10 @@ def _bake(scene: Scene, solution: Solution, settings: LightmapSettings, gpu: GPU
 
     group = np.where(patches.is_back | ~kept, -1, object_of_surface[np.maximum(face_of_patch, 0)])  # fronts only
     baked = np.flatnonzero(group >= 0)
+    joined = np.where(under_near_emitters(solved, patches), group + len(objects), group)  # seams.py
     lattice = np.zeros((len(patches),) + (values.shape[1] + 2,) * 2 + (3,))
     if len(baked):
-        lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], group[baked],
+        lattice[baked] = continuous_lattice(patches.corners[baked], patch_uv[baked], values[baked], joined[baked],
                                             patches.normal[baked], world_quantum=1e-6 * scene_size, uv_quantum=1e-6)
     clustered = clusters.merged[clusters.proxy_of_face]  # (F,) faces solved in a cluster
     sample_object = solved.object_index[patches.surface]
