@@ -9,7 +9,7 @@ RIG := tools/blender_rig.sh
 RIG_5_2 ?= /var/cache/blender-rig
 RIG_4_3 ?= /var/cache/blender-rig-trixie
 
-.PHONY: setup check-system demo test test-blender rigs bench bench-quick bench-production extension samples clean
+.PHONY: setup check-system demo test test-blender rigs bench bench-quick bench-production bench-lightmaps extension samples clean
 
 setup: check-system $(STAMP)
 
@@ -96,6 +96,25 @@ bench-production: setup
 	cp $(OUT)/presets-production/presets.md $(OUT)/presets-production/presets.png $(PRODUCTION_DOCS)/
 	mkdir -p $(PRODUCTION_DOCS)/pictures
 	cp $(OUT)/presets-production/pictures/good_*.png $(PRODUCTION_DOCS)/pictures/
+
+# lightmaps to look at beside Cycles': the Cornell box with its light 1 mm under the ceiling at
+# final (automatic texel density: a wall 144 texels across) and the furnished 4k room at good, each
+# object's texel RMS and pictures (ours | Cycles | difference) into docs/bench/lightmaps/, ~25 min
+LIGHTMAP_DOCS := docs/bench/lightmaps
+bench-lightmaps: setup sample_blends/.made
+	$(PY) -m radiosity_addon.bench.cornell_gap --gap 0.001 --output $(OUT)/cornell/cornell_1mm.blend
+	$(PY) tools/measure_presets.py $(OUT)/cornell/cornell_1mm.blend --output-dir $(OUT)/lightmaps/cornell-1mm \
+	  --runs '{"quality": "final"}' --reference 512 --cycles 64 --pictures $(OUT)/lightmaps/cornell-1mm/pictures
+	$(PY) -m radiosity_addon.bench.rooms --triangles 4000 --output $(OUT)/rooms/room_4k.blend
+	$(PY) tools/measure_presets.py $(OUT)/rooms/room_4k.blend --output-dir $(OUT)/lightmaps/room \
+	  --runs '{"quality": "good"}' --reference 128 --cycles 16 --pictures $(OUT)/lightmaps/room/pictures
+	mkdir -p $(LIGHTMAP_DOCS)
+	cp $(OUT)/lightmaps/cornell-1mm/presets.md $(LIGHTMAP_DOCS)/cornell_1mm.md
+	cp $(OUT)/lightmaps/room/presets.md $(LIGHTMAP_DOCS)/room.md
+	cp $(OUT)/lightmaps/cornell-1mm/pictures/final_ceiling.png $(OUT)/lightmaps/cornell-1mm/pictures/final_floor.png \
+	  $(LIGHTMAP_DOCS)/
+	cp $(OUT)/lightmaps/room/pictures/good_Floor.png $(OUT)/lightmaps/room/pictures/good_Wall_East.png \
+	  $(OUT)/lightmaps/room/pictures/good_Shelf.png $(LIGHTMAP_DOCS)/
 
 clean:
 	rm -rf $(OUT) dist build .pytest_cache

@@ -122,8 +122,8 @@ def print_progress(quiet: bool):
 
 def check_image_options(args) -> None:
     """Refuse bad lightmap/preview options before the solve, not after it."""
-    if not args.texel_density > 0:
-        raise SolveError(f"--texel-density must be positive, got {args.texel_density}")
+    if not args.texel_density >= 0:
+        raise SolveError(f"--texel-density must be positive (or 0: automatic), got {args.texel_density}")
     if args.preview and args.preview_size < 8:
         raise SolveError(f"--preview-size must be at least 8 pixels, got {args.preview_size}")
     if args.exposure is not None and not args.exposure > 0:
@@ -143,7 +143,9 @@ def write_lightmaps_and_preview(args, scene, solution, gpu) -> None:
         for name, lightmap in lightmaps.items():
             np.save(directory / f"{safe_file_name(name)}_lightmap.npy", lightmap.rgba)
         sizes = ", ".join(f"{name} {lm.size[0]}x{lm.size[1]}" for name, lm in lightmaps.items())
-        print(f"lightmaps ({args.texel_density:g} texels/unit): {sizes} -> {directory}/")
+        density = core.chosen_texel_density(scene, settings)
+        print(f"lightmaps ({density:.0f} texels/unit{' (automatic)' if args.texel_density == 0 else ''}):"
+              f" {sizes} -> {directory}/")
     if args.preview:
         preview = core.render_preview(scene, lightmaps, width=args.preview_size, height=args.preview_size, gpu=gpu)
         exposure = core.save_preview(args.preview, scene, preview, exposure=args.exposure)
@@ -233,7 +235,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="write each object's lightmap as DIR/<object>_lightmap.npy: float32 (H, W, 4)"
                              " linear radiance, alpha = coverage, row 0 at v = 0")
     images.add_argument("--texel-density", type=float, default=TEXEL_DENSITY, metavar="D",
-                        help=f"lightmap texels per scene unit (default {TEXEL_DENSITY:g})")
+                        help=f"lightmap texels per scene unit (default {TEXEL_DENSITY:g}; 0: automatic, the"
+                             " quality preset's texel budget spread over the surfaces, at least that)")
     images.add_argument("--max-lightmap-size", type=int, default=MAX_LIGHTMAP_SIZE, metavar="N",
                         help=f"cap on a lightmap's width and height (default {MAX_LIGHTMAP_SIZE})")
     images.add_argument("--content", choices=CONTENTS, default=LightmapSettings().content,
@@ -259,7 +262,9 @@ def build_parser() -> argparse.ArgumentParser:
                              help="longer side of the preview in pixels, at most the file's render size"
                                   " (default 256)")
     bake_parser.add_argument("--texel-density", type=float, metavar="D",
-                             help=f"lightmap texels per metre (default: the file's setting, {TEXEL_DENSITY:g} in a new file)")
+                             help="lightmap texels per metre (default: the file's setting; 0, a new file's:"
+                                  f" automatic, the quality preset's texel budget over the baked area, at least"
+                                  f" {TEXEL_DENSITY:g})")
     bake_parser.add_argument("--content", choices=CONTENTS,
                              help="what the lightmaps hold: the light arriving, shown as emission + Base Color x"
                                   " lightmap (the default of a new file), or combined: the outgoing radiance"

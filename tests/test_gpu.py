@@ -187,3 +187,22 @@ def test_a_spares_warm_up_keeps_only_its_programs_and_changes_no_result(watched,
         assert other.kept_count == 0 and other.spare_bytes == 0
         monkeypatch.undo()
         np.testing.assert_array_equal(solve(scene, settings, gpu=other).patch_radiosity, expected.patch_radiosity)
+
+
+def test_an_opengl_too_old_says_what_was_found_and_what_is_needed():
+    """A macOS-like driver (OpenGL 4.1, no compute shaders): the one-line error names the version and
+    renderer found and the version needed, not a library to install (the libraries are there)."""
+    import os
+    import subprocess
+    import sys
+    env = {**os.environ, "MESA_GL_VERSION_OVERRIDE": "4.1",
+           "MESA_EXTENSION_OVERRIDE": "-GL_ARB_compute_shader -GL_ARB_shader_storage_buffer_object"
+                                      " -GL_ARB_multi_draw_indirect -GL_ARB_shader_image_load_store"}
+    probe = ("from radiosity_addon.core import GLUnavailable\n"
+             "from radiosity_addon.core.gpu.context import create_context\n"
+             "try:\n    create_context()\nexcept GLUnavailable as error:\n    print(error)\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, timeout=60,
+                          cwd=str(SHADERS_DIR.parent))
+    message = done.stdout.strip()
+    assert re.match(r"this machine offers OpenGL 4\.1 \(.+\); the bake needs OpenGL 4\.3", message), done
+    assert "apt-get" not in message and "\n" not in message

@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 from scenes import light_under_ceiling
 
-from radiosity_addon.core import (LightmapSettings, SolveSettings, bake_lightmaps, point_to_polygon,
-                                  scene_from_dict, solve, subdivide)
+from radiosity_addon.core import (LightmapSettings, SolveSettings, bake_lightmaps, point_to_polygon, scene_from_dict,
+                                  solve, subdivide)
 from radiosity_addon.core.lightmap.seams import under_near_emitters
 
 UV = [[0, 0], [1, 0], [1, 1], [0, 1]]
@@ -60,3 +60,4 @@ def test_the_footprint_of_a_near_emitter_is_found_and_a_far_one_has_none():
         ceiling = (patches.surface == 1) & ~patches.is_back
         assert ceiling.sum() > 100 and np.array_equal(under[ceiling], inside[ceiling] & expected)
         assert not under[patches.surface != 1].any()  # the floor is 2 m away; the emitter is no receiver
+

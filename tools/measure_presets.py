@@ -166,12 +166,14 @@ def table(record: dict) -> str:
             f"| {100 * entry['texel_rms']:.1f} % | {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) "
             f"| {entry['worst_object']} {100 * entry['worst_object_error']:+.0f} % | {shadow} | {cycles} |")
     named = [entry for entry in record["runs"] if "object_rms" in entry]
-    if named:  # each object's own texel RMS, run by run: a mean can hide a black halo
+    if named:  # each object's own texel RMS (and with the reference's noise out), run by run
         objects = sorted({name for entry in named for name in entry["object_rms"]})
-        lines += ["", "| object | " + " | ".join(entry["label"] for entry in named) + " |",
-                  "|---|" + "---:|" * len(named)]
-        lines += [f"| {name} | " + " | ".join(f"{100 * entry['object_rms'][name]:.1f} %" if name in entry["object_rms"]
-                                              else "" for entry in named) + " |" for name in objects]
+        lines += ["", "Each object's texel RMS (with the reference's own noise taken out):", "",
+                  "| object | " + " | ".join(entry["label"] for entry in named) + " |", "|---|" + "---:|" * len(named)]
+        cell = lambda entry, name: (f"{100 * entry['object_rms'][name]:.1f} %"  # noqa: E731
+                                    f" ({100 * entry.get('object_rms_noise_out', {}).get(name, float('nan')):.1f} %)")
+        lines += [f"| {name} | " + " | ".join(cell(entry, name) if name in entry["object_rms"] else ""
+                                              for entry in named) + " |" for name in objects]
     return "\n".join(lines) + "\n"
 
 
@@ -294,6 +296,8 @@ def main() -> int:
                                {k: v + reference["noise"][k] for k, v in reference["images"].items()},
                                reference["images"], compare.common_texels(reference["images"], reference["images"]))}
     rows = [(entry, lightmaps[k]) for k, entry in enumerate(record["runs"])]
+    object_noise = {name: compare.relative_noise(reference["noise"], reference["images"], {name: mask}) for name, mask
+                    in compare.common_texels(reference["images"], reference["images"]).items() if mask.any()}
     for samples in args.cycles:
         seconds = times[("cycles", samples)]
         entry = {"label": f"Cycles {samples} samples", "seconds": float(np.median(seconds)), "rounds": seconds,
@@ -314,7 +318,9 @@ def main() -> int:
                      balanced_rms=result["balanced_rms"], balanced_bias=result["balanced_bias"],
                      worst_object=worst, worst_object_error=error,
                      objects={name: e["relative_rgb"] for name, e in result["objects"].items()},
-                     object_rms={name: e["rms"] for name, e in result["objects"].items()})
+                     object_rms={name: e["rms"] for name, e in result["objects"].items()},
+                     object_rms_noise_out={name: compare.without_reference_noise(e["rms"], object_noise.get(name, 0.0))
+                                           for name, e in result["objects"].items()})
         print(f"| {entry['label']} | {entry['method']} | {entry.get('patches', '')} | {entry['seconds']:.1f} "
               f"| {100 * entry['texel_rms']:.1f} % / {100 * entry['texel_rms_inside']:.1f} % "
               f"| {100 * entry['balanced_rms']:.1f} % ({100 * entry['balanced_bias']:.1f} %) | {worst} {100 * error:+.0f} % |", flush=True)

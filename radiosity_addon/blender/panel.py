@@ -91,6 +91,8 @@ class RENDER_PT_radiosity_bake(bpy.types.Panel):
         column.separator()
         column.prop(settings, "content")
         column.prop(settings, "texel_density")
+        if settings.texel_density == 0:  # the last bake's summary says what it chose
+            column.label(text="Texel density: automatic")
         column.prop(settings, "max_resolution")
         column.prop(settings, "uv_margin")
         column.prop(settings, "output")

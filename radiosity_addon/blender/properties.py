@@ -64,8 +64,10 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
     tolerance: FloatProperty(name="Tolerance", min=0.0, max=0.5, default=0.0, precision=6, step=0.01,
                              description="Stop when the unshot power (progressive) or the change per sweep"
                                          " (hemi-cube) falls under this fraction; 0 uses the method's default")
-    texel_density: FloatProperty(name="Texel Density", min=1.0, soft_max=1024.0, default=TEXEL_DENSITY,
-                                 description="Lightmap texels per metre (objects without a resolution override)")
+    texel_density: FloatProperty(name="Texel Density", min=0.0, soft_max=1024.0, default=0.0,
+                                 description="Lightmap texels per metre (objects without a resolution override);"
+                                             f" 0: automatic, the quality's texel budget over the baked"
+                                             f" surfaces, at least {TEXEL_DENSITY:g}")
     max_resolution: IntProperty(name="Max Resolution", min=8, max=8192, default=MAX_LIGHTMAP_SIZE, subtype="PIXEL",
                                 description="Largest lightmap side in texels")
     uv_margin: FloatProperty(name="UV Margin", min=0.001, max=1.0, default=_OPTIONS.uv_margin,

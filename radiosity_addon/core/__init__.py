@@ -66,6 +66,8 @@ bake_lightmaps(scene, solution, settings=None, gpu=None, objects=None, progress=
 Lightmap               levels (RGBA float32 mip chain, alpha = coverage), filled_image() (for
                        renderers that build their own mipmaps), surfaces and their surface_uv.
 lightmap_sizes(scene, settings=None, objects=None) -> {object: (width, height)}
+chosen_texel_density(scene, settings, objects=None) -> texels per unit   the settings' density, or
+                       where it is 0 (automatic) the preset's texel budget over the baked area.
                        the sizes bake_lightmaps will use (e.g. to bake material maps first).
 lightmap_seconds(scene, sizes, settings) -> seconds  about how long bake_lightmaps takes for those sizes.
 render_preview(scene, lightmaps, camera=None, width=512, height=512, supersample=2, gpu=None)
@@ -94,7 +96,7 @@ from .errors import USER_ERRORS, GLUnavailable, SceneError, SolveCancelled, Solv
 from .gpu import GPU, open_gpu
 from .hemicube import form_factor_matrix, point_to_polygon, solve_linear
 from .hemicube.linear_solvers import Convergence
-from .lightmap import Lightmap, bake_lightmaps, lightmap_seconds, lightmap_sizes
+from .lightmap import Lightmap, bake_lightmaps, chosen_texel_density, lightmap_seconds, lightmap_sizes
 from .preview import Camera, Preview, render_preview, save_preview, tone_map, write_png
 from .report import Report
 from .scene.geometry import bilinear
@@ -113,7 +115,7 @@ __all__ = [
     "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "QUALITIES", "QUALITY_PRESETS", "SOLVE_METHODS", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
     "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "StageTimer", "Surface", "TEXEL_DENSITY",
     "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",
-    "form_factor_matrix", "lightmap_seconds", "lightmap_sizes", "polygon_faults",
+    "form_factor_matrix", "lightmap_seconds", "lightmap_sizes", "chosen_texel_density", "polygon_faults",
     "load_scene", "open_gpu", "point_to_polygon", "render_preview", "save_preview", "save_scene", "tone_map", "write_png",
     "scene_from_dict", "solve", "solve_linear", "subdivide", "surfaces_with_material_maps",
 ]

@@ -36,12 +36,14 @@ QUALITY_PRESETS = {
                         "hemicube_res": 32, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 0.5,
                         "probe_pieces": 4},
               "tolerance": {"progressive": 3e-2, "hemicube": 1e-3},
-              "lightmaps": {"direct_map_resolution": 256, "direct_pieces": 2, "direct_subsamples": 2}},
+              "lightmaps": {"direct_map_resolution": 256, "direct_pieces": 2, "direct_subsamples": 2,
+                            "texel_budget": 32768}},
     "good": {"solve": {"patch_size": 1.0, "elements": 1, "refinements": 5, "visibility_res": 256,
                        "hemicube_res": 32, "hemicube_elements": 1, "emitter_gap_resolution": 4.0, "refine_budget": 0.5,
                        "probe_pieces": 4},
              "tolerance": {"progressive": 2e-2, "hemicube": 1e-5},
-             "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 2, "direct_subsamples": 2}},
+             "lightmaps": {"direct_map_resolution": 512, "direct_pieces": 2, "direct_subsamples": 2,
+                           "texel_budget": 65536}},
     # good's texel pass takes emitters in 2 x 2 pieces: 4 x 4 gave the 4k room 5.13 % where 2 x 2 gives 5.16 %
     # for 8.1 s of lightmaps instead of 4.4 (the Cornell box 2.2 % either way; the penumbrae alike to the eye).
     # final's texel pass takes emitters in 4 x 4 pieces: 8 x 8 gave the same error on the 4k room
@@ -59,7 +61,7 @@ QUALITY_PRESETS = {
                         "probe_pieces": 3},
               "tolerance": {"progressive": 1e-2, "hemicube": 1e-5},
               "lightmaps": {"direct_map_resolution": 1024, "direct_pieces": 4, "direct_subsamples": 2,
-                            "sky_directions": 256}},
+                            "sky_directions": 256, "texel_budget": 131072}},
 }
 DEFAULT_TOLERANCE = QUALITY_PRESETS["final"]["tolerance"]
 
@@ -156,7 +158,7 @@ class SolveSettings:
 
 @dataclass
 class LightmapSettings:
-    texel_density: float = TEXEL_DENSITY  # texels per scene unit
+    texel_density: float = TEXEL_DENSITY  # texels per scene unit; 0: automatic (`texel_budget`)
     max_size: int = MAX_LIGHTMAP_SIZE  # cap on width and height
     resolution_overrides: dict = field(default_factory=dict)  # object name -> side (or (w, h)); 0 = density
     power_of_two: bool = False  # round sizes up to powers of two
@@ -168,6 +170,9 @@ class LightmapSettings:
     direct_pieces: int = 8  # emissive polygons and area lamps shoot that light in up to N x N pieces (penumbrae)
     direct_subsamples: int = 4  # where that light is sharp, a texel takes the mean of N x N points over its square (1: its centre)
     sky_directions: int = 0  # the sky's light recomputed at every texel from N directions (0: the elements' interpolated)
+    # with texel_density 0, the density that spreads this many texels over the baked surfaces, and
+    # never under TEXEL_DENSITY: a small scene gets as many texels as the preset's quality asks
+    texel_budget: int = 65536
 
     @classmethod
     def preset(cls, quality: str = "good", **given) -> "LightmapSettings":
@@ -177,8 +182,10 @@ class LightmapSettings:
         return cls(**(QUALITY_PRESETS[quality]["lightmaps"] | given))
 
     def validate(self) -> None:
-        if not (math.isfinite(self.texel_density) and self.texel_density > 0):
-            raise SolveError(f"texel density must be positive, got {self.texel_density}")
+        if not (math.isfinite(self.texel_density) and self.texel_density >= 0):
+            raise SolveError(f"texel density must be positive (or 0: automatic), got {self.texel_density}")
+        if self.texel_density == 0 and self.texel_budget < 1:
+            raise SolveError(f"the automatic texel density needs a positive texel budget, got {self.texel_budget}")
         if self.content not in CONTENTS:
             raise SolveError(f"unknown lightmap content '{self.content}' (choose {', '.join(CONTENTS)})")
         if self.max_size < MIN_LIGHTMAP_SIZE:

@@ -168,8 +168,10 @@ class Solve:
             # the result before the context's release: the parent takes it and ends this process
             protocol.save_images(self.directory / protocol.RESULT_FILE, images)
             report = solution.report
+            density = core.chosen_texel_density(scene, lightmap_settings, objects)
+            automatic = " (automatic)" if lightmap_settings.texel_density == 0 else ""
             self.pipe.send("result", file=protocol.RESULT_FILE, report=report.to_dict(),
-                           summary=report.summary_line())
+                           summary=f"{report.summary_line()} · {density:.0f} texels/m{automatic}")
 
 
 def main(job_dir: str) -> int:

@@ -4,5 +4,7 @@ gutters and mips."""
 from .bake import Lightmap, bake_lightmaps, lightmap_sizes
 from .bake import predicted_seconds as lightmap_seconds
 from .mips import filled_image, gl_mip_count, mip_levels
+from .size import chosen_texel_density
 
-__all__ = ["Lightmap", "bake_lightmaps", "lightmap_seconds", "lightmap_sizes", "filled_image", "gl_mip_count", "mip_levels"]
+__all__ = ["Lightmap", "bake_lightmaps", "chosen_texel_density", "lightmap_seconds", "lightmap_sizes", "filled_image",
+           "gl_mip_count", "mip_levels"]

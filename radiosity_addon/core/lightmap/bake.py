@@ -39,7 +39,7 @@ from .lattice import continuous_lattice, element_values, lattice_parameters
 from .seams import under_near_emitters
 from .mips import filled_image, mip_levels
 from .scattered import corner_values, element_samples
-from .size import given_uvs, resolve_size, uv_polygon_area
+from .size import chosen_texel_density, given_uvs, resolve_size, uv_polygon_area
 
 
 
@@ -85,6 +85,7 @@ class Layouts:
 def plan_layouts(scene: Scene, settings: LightmapSettings, objects=None) -> Layouts:
     """Sizes and UVs of the lightmaps of `objects` (default: all), before any value is known."""
     settings.validate()
+    settings = replace(settings, texel_density=chosen_texel_density(scene, settings, objects))
     all_objects = scene.object_surfaces
     overrides = {name: size for name, size in settings.resolution_overrides.items() if size}
     unknown = sorted((set(overrides) | set(objects or ())) - set(all_objects))
@@ -169,6 +170,7 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     that only occlude need none), keyed by object name (see core/__init__.py); `progress` as a
     solve's (its details' "eta": seconds left)."""
     settings = settings or LightmapSettings()
+    settings = replace(settings, texel_density=chosen_texel_density(scene, settings, objects))
     layouts = plan_layouts(scene, settings, objects)
     plan = StagePlan(progress, {"lightmaps": predicted_seconds(scene, layouts.sizes, settings)})
     with plan.stage("lightmaps", f"laying out {len(layouts.objects)} lightmap(s)"):

@@ -4,6 +4,7 @@ two, optionally: all do). And the UVs an object brings, checked before they are 
 
 from __future__ import annotations
 
+import math
 import numbers
 
 import numpy as np
@@ -11,6 +12,7 @@ import numpy as np
 from ..errors import SceneError, SolveError
 from ..scene import Scene
 from ..settings import MIN_LIGHTMAP_SIZE as MIN_SIZE
+from ..settings import TEXEL_DENSITY, LightmapSettings
 
 UV_TOLERANCE = 1e-3  # how far given UVs may stray outside [0, 1]
 SIZE_MULTIPLE = 8  # sizes round up to this so levels 1-3 halve exactly, as GL's floor(w / 2) does
@@ -61,3 +63,14 @@ def given_uvs(scene: Scene, name: str, indices: np.ndarray) -> bool:
     if uv_polygon_area(uv).sum() <= 0:
         raise SceneError(f"object '{name}': its lightmap UVs have zero area")
     return True
+
+
+def chosen_texel_density(scene: Scene, settings: LightmapSettings, objects=None) -> float:
+    """The settings' texel density, or where it is 0 (automatic) the one that spreads the settings'
+    `texel_budget` texels over the surfaces of `objects` (default: all), at least TEXEL_DENSITY."""
+    if settings.texel_density > 0:
+        return float(settings.texel_density)
+    chosen = set(scene.object_names if objects is None else objects)
+    baked = np.isin(np.asarray(scene.object_names)[scene.object_index], list(chosen))
+    area = float(scene.area[baked].sum())
+    return max(TEXEL_DENSITY, math.sqrt(settings.texel_budget / area)) if area > 0 else TEXEL_DENSITY
