@@ -169,7 +169,7 @@ class Solve:
             protocol.save_images(self.directory / protocol.RESULT_FILE, images)
             report = solution.report
             density = core.chosen_texel_density(scene, lightmap_settings, objects)
-            automatic = " (automatic)" if lightmap_settings.texel_density == 0 else ""
+            automatic = " · auto density" if lightmap_settings.texel_density == 0 else ""  # pieces the panel wraps at
             self.pipe.send("result", file=protocol.RESULT_FILE, report=report.to_dict(),
                            summary=f"{report.summary_line()} · {density:.0f} texels/m{automatic}")
 
