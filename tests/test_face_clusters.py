@@ -151,3 +151,15 @@ def test_connected_components_match_a_union_find(seed):
     path = np.stack([np.arange(count - 1), np.arange(1, count)], axis=1)[rng.random(count - 1) < 0.9]
     pairs = np.concatenate([pairs, path[rng.permutation(len(path))]])
     assert np.array_equal(connected_labels(count, pairs), union_find_labels(count, pairs))
+
+
+def test_a_bowl_is_cut_into_clusters_that_face_as_its_faces_do():
+    """An open hemispherical shell (a bowl, 26 cm across) of small faces: bent, it is cut, and its
+    pieces are not joined back into one down-facing rectangle (which saw only the table under it,
+    where the bowl's sides see the room): every face stays within 60 degrees of its cluster's normal."""
+    triangles, uv = sphere_triangles([0, 0, 0.13], 0.13, 16)
+    bowl = triangles[triangles[:, :, 2].mean(axis=1) < 0.13 - 1e-9]  # the lower half, open at the top
+    clusters = cluster_faces(triangle_scene([("bowl", bowl, uv[: len(bowl)], 0.5, 0.0)]), patch_size=1.0)
+    faces = clusters.faces
+    turn = np.einsum("nd,nd->n", faces.normal, clusters.proxies.normal[clusters.proxy_of_face])
+    assert clusters.merged.sum() >= 4 and turn.min() > np.cos(np.radians(60.0)), (clusters.merged.sum(), turn.min())

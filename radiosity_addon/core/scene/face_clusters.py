@@ -309,7 +309,10 @@ def _absorb_small(scene: Scene, faces: np.ndarray, label: np.ndarray, pairs: np.
         bigger = (stats.area[b] > stats.area[a]) | ((stats.area[b] == stats.area[a]) & (b < a))
         take = (stats.area[a] < small_area) & bigger
         score = np.einsum("nd,nd->n", stats.normal[a], stats.normal[b])
-        take &= score > limit
+        # nor may it bend what it joins past COHERENCE: the pieces of a bowl cut as bent stay apart
+        summed = (stats.normal * (stats.coherence * stats.area)[:, None])
+        joined = np.linalg.norm(summed[a] + summed[b], axis=1) / (stats.area[a] + stats.area[b])
+        take &= (score > limit) & (joined >= np.minimum(COHERENCE, stats.coherence[b]))
         a, b, score = a[take], b[take], score[take]
         if len(a) == 0:
             return label
