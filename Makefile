@@ -9,7 +9,7 @@ RIG := tools/blender_rig.sh
 RIG_5_2 ?= /var/cache/blender-rig
 RIG_4_3 ?= /var/cache/blender-rig-trixie
 
-.PHONY: setup check-system demo test test-blender rigs bench bench-quick bench-production bench-lightmaps extension samples clean
+.PHONY: setup check-system demo test test-timing test-blender rigs bench bench-quick bench-production bench-lightmaps extension samples clean
 
 setup: check-system $(STAMP)
 
@@ -33,6 +33,10 @@ demo: setup sample_blends/.made
 
 test: setup
 	$(PY) -m pytest
+
+# the wall-clock ratios `make test` leaves out (tests marked timing): run them on a quiet machine
+test-timing: setup
+	$(PY) -m pytest -m timing
 
 # the real-Blender tier: the zip installed into Debian's Blender 5.2.2 and 4.3.2 (roots made by
 # tools/blender_rig.sh: needs root, debootstrap and a Debian mirror; ~1-3 min each the first time),

@@ -42,7 +42,7 @@ def test_extension_builds_validates_installs_and_bakes(tmp_path):
                     "radiosity_baker-0.1.0-windows_x64.zip"]
     linux_zip = dist / "radiosity_baker-0.1.0-linux_x64.zip"
     names = zipfile.ZipFile(linux_zip).namelist()
-    assert "blender_manifest.toml" in names and "__init__.py" in names
+    assert "blender_manifest.toml" in names and "__init__.py" in names and "LICENSE" in names  # GPL-3.0: its text ships
     assert any(n.startswith("shaders/") and n.endswith(".comp") for n in names)
     for package in ("moderngl", "glcontext"):  # cp311, cp313 and cp314: Blender 4.2 to Debian's 5.2
         assert sorted(n.split("-")[2] for n in names if n.startswith(f"wheels/{package}-")) == \
