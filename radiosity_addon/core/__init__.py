@@ -29,7 +29,9 @@ Solving
 solve(scene, settings=None, progress=None, should_cancel=None, gpu=None, preview=None,
       preview_interval=2.0, timer=None) -> Solution
     scene          the Scene to solve.
-    settings       SolveSettings (None: the defaults the command line and the panel share):
+    settings       SolveSettings (None: SolveSettings(), the dataclass's own defaults: progressive,
+                   final's tolerance, 128-pixel hemi-cubes; the command line and the panel start
+                   from SolveSettings.preset("good") instead, `auto` method):
                    method "progressive" | "hemicube"; subdiv N (every surface N x N) or, with
                    subdiv None, patch_size (scene units); elements S (S x S per patch,
                    progressive); hemicube_res; solver "gauss-seidel" (default) |
@@ -56,7 +58,8 @@ Solution               patches, patch_radiosity (P, 3), element_radiosity (P, S,
 Lightmaps and preview
 ---------------------
 bake_lightmaps(scene, solution, settings=None, gpu=None, objects=None, progress=None) -> {object name: Lightmap}
-    settings       LightmapSettings: texel_density (texels per scene unit), max_size,
+    settings       LightmapSettings (None: LightmapSettings()): texel_density (texels per scene
+                   unit; 0: automatic, the preset's texel_budget over the baked area), max_size,
                    resolution_overrides {object: side or (w, h)}, power_of_two, gutter, and
                    content: "light" (default) — the light H arriving, B = E + ρH, shown as
                    emission + albedo x lightmap — or "combined", B itself (per texel from the
