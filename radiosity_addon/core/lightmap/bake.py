@@ -80,6 +80,7 @@ class Layouts:
     surface_uv: np.ndarray  # (S, 4, 2) the given UVs, and the automatic ones made here
     laid_out: np.ndarray  # (S,) bool: surfaces given automatic UVs here
     uv_maps: np.ndarray  # (S, 2, 4) their affine maps: uv = M @ [x, y, z, 1]
+    texel_density: float  # the settings' or, where they ask for it automatically, the one chosen
 
 
 def plan_layouts(scene: Scene, settings: LightmapSettings, objects=None) -> Layouts:
@@ -97,7 +98,7 @@ def plan_layouts(scene: Scene, settings: LightmapSettings, objects=None) -> Layo
     pad = settings.gutter + 1  # a chart's grazed texels, then its gutter
     layouts = Layouts(objects=objects, sizes={}, object_of_surface=np.full(len(scene), -1, dtype=np.int64),
                       surface_uv=scene.uv.copy(), laid_out=np.zeros(len(scene), dtype=bool),
-                      uv_maps=np.zeros((len(scene), 2, 4)))
+                      uv_maps=np.zeros((len(scene), 2, 4)), texel_density=settings.texel_density)
     for number, (name, indices) in enumerate(objects.items()):
         layouts.object_of_surface[indices] = number
         override = overrides.get(name)
@@ -170,7 +171,6 @@ def bake_lightmaps(scene: Scene, solution: Solution, settings: LightmapSettings 
     that only occlude need none), keyed by object name (see core/__init__.py); `progress` as a
     solve's (its details' "eta": seconds left)."""
     settings = settings or LightmapSettings()
-    settings = replace(settings, texel_density=chosen_texel_density(scene, settings, objects))
     layouts = plan_layouts(scene, settings, objects)
     plan = StagePlan(progress, {"lightmaps": predicted_seconds(scene, layouts.sizes, settings)})
     with plan.stage("lightmaps", f"laying out {len(layouts.objects)} lightmap(s)"):
@@ -273,7 +273,7 @@ def _bake(scene: Scene, solution: Solution, settings: LightmapSettings, gpu: GPU
             add_direct_light(lightmap_gpu, solution, clusters, faces, texels, settings, reflected, texel_sky,
                              sun_maps)
         clear_contacts(faces, texels, _holds_b(mapped, faces, scene) if not (per_texel or light) else None, clusters,
-                       1.0 / settings.texel_density)
+                       1.0 / layouts.texel_density)
     lightmaps = {}
     for name, entry in texels.items():
         pulse()

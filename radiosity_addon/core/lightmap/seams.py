@@ -22,7 +22,8 @@ def under_near_emitters(scene: Scene, patches: Patches) -> np.ndarray:
     (its emitting side: a two-sided emitter's back is a patch of its own), facing it, nearer than
     NEAR_EMITTER_GAP of its surface's size (refinement splits an emitter finely), and inside it."""
     under = np.zeros(len(patches), dtype=bool)
-    emitters = np.flatnonzero(np.any(patches.emission > 0, axis=1))
+    emits = np.any(patches.emission > 0, axis=1)
+    emitters = np.flatnonzero(emits)
     if len(emitters) == 0:
         return under
     corners = patches.corners
@@ -32,7 +33,7 @@ def under_near_emitters(scene: Scene, patches: Patches) -> np.ndarray:
     surface_corners = scene.corners[patches.surface[emitters]]
     gap[emitters] = NEAR_EMITTER_GAP * np.linalg.norm(surface_corners - surface_corners.mean(axis=1)[:, None],
                                                       axis=2).max(axis=1) * 2
-    receivers = np.flatnonzero(~np.any(patches.emission > 0, axis=1))
+    receivers = np.flatnonzero(~emits)
     for query, emitter in near_pairs(centre, radius + gap, receivers, radius[receivers], others=emitters):
         receiver = receivers[query]
         normal = patches.normal[emitter]
