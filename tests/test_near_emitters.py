@@ -6,11 +6,14 @@ interpolated of the solve's light is never below zero."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scenes import light_under_ceiling
 
 from radiosity_addon.core import (LightmapSettings, SolveSettings, bake_lightmaps, point_to_polygon, scene_from_dict,
                                   solve, subdivide)
 from radiosity_addon.core.lightmap.seams import under_near_emitters
+
+pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
 
 UV = [[0, 0], [1, 0], [1, 1], [0, 1]]
 HALF = 0.2  # the emitter's half width, centred at (1, 1)

@@ -7,7 +7,9 @@ import pytest
 from radiosity_addon.core import LightmapSettings, OpacityMaps, SolveSettings, bake_lightmaps, load_scene, save_scene, solve
 from radiosity_addon.core.scene.face_clusters import cluster_faces
 from radiosity_addon.core.scene.load import scene_from_dict
-from scenes import grid_triangles, triangle_scene
+from scenes import grid_triangles, solve_settings, triangle_scene
+
+pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
 
 SQUARE_UV = [[0, 0], [1, 0], [1, 1], [0, 1]]
 SUN = {"type": "sun", "color": [1, 1, 1], "direction": [0.3, 0.2, -1.0], "strength": np.pi}  # H = cos of its angle
@@ -76,7 +78,7 @@ def test_the_sky_passes_the_clear_part_of_a_card(gpu):
     scene = card_over_floor(half, world=True)
     solid = card_over_floor(np.ones((8, 8), dtype=np.float32), world=True)
     clear = card_over_floor(np.zeros((8, 8), dtype=np.float32), world=True)
-    settings = SolveSettings(method="hemicube", subdiv=8, hemicube_res=64, hemicube_elements=1)
+    settings = solve_settings(method="hemicube", subdiv=8, hemicube_res=64, hemicube_elements=1)
     under = []
     for case in (solid, scene, clear):
         solution = solve(case, settings, gpu=gpu)

@@ -20,6 +20,8 @@ from radiosity_addon.core.gpu.resources import CLIP_DISTANCE0, clip_distances_wr
 from radiosity_addon.core.visibility import hemicube
 from radiosity_addon.core.visibility.hemisphere import VisibilityMap
 
+pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
+
 SHADERS = Path(__file__).resolve().parents[1] / "shaders"
 
 

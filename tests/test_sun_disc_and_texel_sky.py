@@ -7,11 +7,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from scenes import surface
 from test_texel_light import UV, texel_means
 
 from radiosity_addon.core import LightmapSettings, SolveSettings, bake_lightmaps, point_to_polygon, scene_from_dict, solve
 from radiosity_addon.core.shooting.lamps import sun_disc
+
+pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
 
 FLOOR = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]
 ANGLE = math.radians(10.0)  # the sun's disc: its penumbra 2 tan(5°) = 17.5 cm wide at 1 m

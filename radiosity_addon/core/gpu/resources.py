@@ -20,6 +20,7 @@ import contextlib
 import re
 import threading
 
+from . import debug
 from .context import create_context
 from .shaders import includes, shader_source, with_defines
 
@@ -102,6 +103,14 @@ class GPU:
         self._kept: dict[tuple, tuple] = {}  # key -> (its own scope, the object), least recently used first
         for name, source in includes().items():
             self.ctx.includes[name] = source
+        with active(self.ctx):
+            debug.watch(self.ctx)
+            self._no_framebuffer = self.ctx.detect_framebuffer(0)  # binding 0 is always valid
+
+    def rest_framebuffer(self) -> None:
+        """Bind no framebuffer (0): moderngl binds its last-used one again after making the next,
+        which must never be a released one (GL_INVALID_OPERATION)."""
+        self._no_framebuffer.use()
 
     def program(self, vertex: str, fragment: str | None = None, geometry: str | None = None,
                 defines: dict | None = None):
@@ -175,6 +184,7 @@ class GPU:
         """Release what is kept between scopes (`kept` objects, pooled scratch targets) and keep
         only the compiled programs: a context warmed by one job holds no memory for the next."""
         with active(self.ctx):
+            self.rest_framebuffer()
             for scope, _ in reversed(list(self._kept.values())):
                 scope.release()
             self._kept.clear()
@@ -183,20 +193,26 @@ class GPU:
                     obj.release()
             self._spares.clear()
 
-    def close(self) -> None:
+    def close(self, report_problems: bool = True) -> None:
+        """Release everything; then raise GLReportedProblem if the driver reported errors or
+        undefined behaviour on this context (only where RADIOSITY_GL_DEBUG asked it to log)."""
         self.release_targets()
         with active(self.ctx):
             for program in self._programs.values():
                 program.release()
             self._programs.clear()
+            problems = debug.drain(self.ctx)
+        debug.forget(self.ctx)
         if self._owns_context:
             self.ctx.release()
+        if problems and report_problems:
+            raise debug.GLReportedProblem("; ".join(problems))
 
     def __enter__(self) -> "GPU":
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    def __exit__(self, exc_type, *exc) -> None:
+        self.close(report_problems=exc_type is None)
 
 
 @contextlib.contextmanager
@@ -272,6 +288,8 @@ class Resources:
                                                 index_element_size=index_element_size))
 
     def release(self) -> None:
+        if any(type(obj).__name__ == "Framebuffer" for obj in self._objects):
+            self.gpu.rest_framebuffer()
         while self._objects:
             obj = self._objects.pop()
             key = self._scratch.pop(id(obj), None)

@@ -10,6 +10,13 @@ from . import bindings
 
 SHADERS_DIR = Path(__file__).resolve().parents[3] / "shaders"
 INCLUDE_DIR = SHADERS_DIR / "include"
+STAGE_SUFFIXES = (".vert", ".geom", ".frag", ".comp")
+loaded: set[str] = set()  # the stage files this process has read: what a test run compiled
+
+
+def stage_files() -> list[str]:
+    """Every stage file in `shaders/`."""
+    return sorted(path.name for path in SHADERS_DIR.iterdir() if path.suffix in STAGE_SUFFIXES)
 
 
 @functools.lru_cache(maxsize=None)
@@ -17,6 +24,7 @@ def shader_source(name: str) -> str:
     path = SHADERS_DIR / name
     if not path.is_file():
         raise FileNotFoundError(f"shader '{name}' not found in {SHADERS_DIR}; reinstall the add-on")
+    loaded.add(name)
     return path.read_text()
 
 
