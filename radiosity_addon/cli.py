@@ -1,4 +1,4 @@
-"""Command line: `python -m radiosity_addon {solve,bake,bench} ...` (docs/architecture.md, Interfaces).
+"""Command line: `python -m radiosity_addon {solve,bake} ...` (docs/architecture.md, Interfaces).
 
 Errors a user can cause end in one line on stderr and exit status 2, never a traceback.
 """
@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from . import core
-from .core import (CONTENTS, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, QUALITIES, SHOOTING_POINTS, SOLVERS, TEXEL_DENSITY,
+from .core import (CONTENTS, DEFAULT_QUALITY, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, QUALITIES, SHOOTING_POINTS, SOLVERS, TEXEL_DENSITY,
                    VISIBILITY_VARIANTS)
 from .core import LightmapSettings, SolveError, SolveSettings
 
@@ -60,12 +60,12 @@ def add_solver_options(parser: argparse.ArgumentParser, defaults_from_file: bool
     """The solver options. An option not given takes the --quality preset's value (`solve`), or
     (`bake`, with `defaults_from_file`) leaves the .blend's own setting in place: either way it is
     left out of the parsed arguments."""
-    defaults = SolveSettings.preset("good")
+    defaults = SolveSettings()
     group = parser.add_argument_group("solver")
-    group.add_argument("--quality", choices=QUALITIES, default=argparse.SUPPRESS if defaults_from_file else "good",
+    group.add_argument("--quality", choices=QUALITIES, default=argparse.SUPPRESS if defaults_from_file else DEFAULT_QUALITY,
                        help="what every knob below defaults to: draft (fast), good, final (the README's"
                             " 'What accuracy costs' gives each one's measured error and time)"
-                            + (" (default: the file's setting)" if defaults_from_file else " (default good)"))
+                            + (" (default: the file's setting)" if defaults_from_file else f" (default {DEFAULT_QUALITY})"))
     for flag, field, keywords, text in SOLVER_OPTIONS:
         default = getattr(defaults, field)
         keywords = {**keywords, "default": argparse.SUPPRESS}
@@ -73,7 +73,7 @@ def add_solver_options(parser: argparse.ArgumentParser, defaults_from_file: bool
             text += " (default: the file's setting)"
         elif default is not None and field != "tolerance":
             shown = f"{default:g}" if isinstance(default, float) else f"{default}"
-            text += f" (default: the quality's; good: {shown})"
+            text += f" (default: the quality's; {DEFAULT_QUALITY}: {shown})"
         group.add_argument(flag, dest=field, help=text, **keywords)
     group.add_argument("--no-skips", dest="skip_unneeded", action="store_false",
                        default=argparse.SUPPRESS if defaults_from_file else True,
@@ -91,7 +91,7 @@ def given_solver_options(args) -> dict:
 
 def settings_from_args(args) -> SolveSettings:
     given = given_solver_options(args)
-    return SolveSettings.preset(given.pop("quality", "good"), **given)
+    return SolveSettings.preset(given.pop("quality", DEFAULT_QUALITY), **given)
 
 
 class ProgressLine:
@@ -122,7 +122,7 @@ def print_progress(quiet: bool):
 
 def check_image_options(args) -> None:
     """Refuse bad lightmap/preview options before the solve, not after it."""
-    if not args.texel_density >= 0:
+    if args.texel_density is not None and not args.texel_density >= 0:
         raise SolveError(f"--texel-density must be positive (or 0: automatic), got {args.texel_density}")
     if args.preview and args.preview_size < 8:
         raise SolveError(f"--preview-size must be at least 8 pixels, got {args.preview_size}")
@@ -144,7 +144,7 @@ def write_lightmaps_and_preview(args, scene, solution, gpu) -> None:
             np.save(directory / f"{safe_file_name(name)}_lightmap.npy", lightmap.rgba)
         sizes = ", ".join(f"{name} {lm.size[0]}x{lm.size[1]}" for name, lm in lightmaps.items())
         density = core.chosen_texel_density(scene, settings)
-        print(f"lightmaps ({density:.0f} texels/unit{' (automatic)' if args.texel_density == 0 else ''}):"
+        print(f"lightmaps ({density:.0f} texels/unit{' (automatic)' if settings.texel_density == 0 else ''}):"
               f" {sizes} -> {directory}/")
     if args.preview:
         preview = core.render_preview(scene, lightmaps, width=args.preview_size, height=args.preview_size, gpu=gpu)
@@ -211,14 +211,6 @@ def command_bake(args) -> int:
     return 0
 
 
-def command_bench(args) -> int:
-    from .bench.run import run_bench
-
-    run_bench(Path(args.output_dir), args.quick, args.cache_dir, args.table51_samples,
-              tuple(name for name in args.scenes.split(",") if name))
-    return 0
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m radiosity_addon",
                                      description="Radiosity Baker: diffuse GI by radiosity on the GPU.")
@@ -234,9 +226,9 @@ def build_parser() -> argparse.ArgumentParser:
     images.add_argument("--lightmaps", metavar="DIR",
                         help="write each object's lightmap as DIR/<object>_lightmap.npy: float32 (H, W, 4)"
                              " linear radiance, alpha = coverage, row 0 at v = 0")
-    images.add_argument("--texel-density", type=float, default=TEXEL_DENSITY, metavar="D",
-                        help=f"lightmap texels per scene unit (default {TEXEL_DENSITY:g}; 0: automatic, the"
-                             " quality preset's texel budget spread over the surfaces, at least that)")
+    images.add_argument("--texel-density", type=float, default=None, metavar="D",
+                        help="lightmap texels per scene unit (default 0: automatic, the quality preset's texel"
+                             f" budget spread over the surfaces, at least {TEXEL_DENSITY:g})")
     images.add_argument("--max-lightmap-size", type=int, default=MAX_LIGHTMAP_SIZE, metavar="N",
                         help=f"cap on a lightmap's width and height (default {MAX_LIGHTMAP_SIZE})")
     images.add_argument("--content", choices=CONTENTS, default=LightmapSettings().content,
@@ -276,17 +268,6 @@ def build_parser() -> argparse.ArgumentParser:
     bake_parser.add_argument("--quiet", action="store_true", help="no progress line")
     bake_parser.set_defaults(handler=command_bake)
 
-    bench_parser = commands.add_parser(
-        "bench", help="accuracy vs time against Cycles and exact answers, and the dissertation's Table 5.1")
-    bench_parser.add_argument("--quick", action="store_true", help="a smaller sweep: a few minutes on 2 cores")
-    bench_parser.add_argument("--output-dir", required=True, metavar="DIR",
-                              help="writes accuracy_vs_time.{json,md,png} and table_5_1.{json,md}")
-    bench_parser.add_argument("--cache-dir", metavar="DIR", help="Cycles reference cache (default DIR/cache)")
-    bench_parser.add_argument("--table51-samples", type=int, default=None, metavar="N",
-                              help="timed solves per solver and size for Table 5.1 (default 30, quick 5; 0 skips)")
-    bench_parser.add_argument("--scenes", default="cornell-box,furnace,plates",
-                              help="comma-separated: cornell-box (Cycles reference), furnace, plates (exact)")
-    bench_parser.set_defaults(handler=command_bench)
     return parser
 
 

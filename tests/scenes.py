@@ -4,7 +4,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from radiosity_addon.bench.scenes import CUBE_FACES, opposed_rectangles_form_factor  # noqa: F401 (re-exported)
+from bench.scenes import CUBE_FACES, opposed_rectangles_form_factor  # noqa: F401 (re-exported)
+from radiosity_addon.core import LightmapSettings, SolveSettings
+
+# The settings the analytic tests are written for, finer than the default preset: final's patches
+# and elements, progressive refinement, 128-pixel hemi-cubes 2 x 2 a patch, emitters in 8 x 8
+# pieces; lightmaps at 64 texels a metre, 4 x 4 points a sharp texel. Fixed here, so that tuning a
+# preset moves no test's reference.
+ANALYTIC_SOLVE = {"quality": "final", "method": "progressive", "hemicube_res": 128, "hemicube_elements": 2,
+                  "probe_pieces": 8}
+ANALYTIC_LIGHTMAPS = {"quality": "final", "texel_density": 64.0, "direct_pieces": 8, "direct_subsamples": 4,
+                      "sky_directions": 0}
+
+
+def solve_settings(**given) -> SolveSettings:
+    """ANALYTIC_SOLVE with the fields in `given` set as given."""
+    return SolveSettings(**(ANALYTIC_SOLVE | given))
+
+
+def lightmap_settings(**given) -> LightmapSettings:
+    """ANALYTIC_LIGHTMAPS with the fields in `given` set as given."""
+    return LightmapSettings(**(ANALYTIC_LIGHTMAPS | given))
 
 
 def surface(name, vertices, reflectance, emission, obj=None):

@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scenes import light_under_ceiling
+from scenes import light_under_ceiling, solve_settings
 from test_progressive import cube, cube_face_reference, face_means
 
-from radiosity_addon.core import SolveSettings, load_scene, scene_from_dict, solve, subdivide
+from radiosity_addon.core import load_scene, scene_from_dict, solve, subdivide
 from radiosity_addon.core.progressive.clusters import (cluster_owners, FINEST_MEMBERS, NORMAL_BINS, ClusterGrid, ClusterShooters,
                                                       build_clusters, coarser, grouped, octahedral_bins, packed_keys)
 from radiosity_addon.core.shooting import ElementTextures, PatchBuffers, PatchShooters, ShootingPass, ShotVisibility
@@ -26,9 +26,9 @@ def test_clusters_hold_every_patch_once_near_each_other_and_facing_alike():
     assert [level.cell for level in levels] == pytest.approx([clusters.cell / 4, clusters.cell / 2, clusters.cell])
     # levels go down to the first whose clusters hold FINEST_MEMBERS patches or fewer on average
     assert levels[0].members.mean() <= FINEST_MEMBERS < levels[1].members.mean()
-    for finer, coarser in zip(levels, levels[1:]):  # nested: a finer cluster lies in one coarser cluster
-        pairs = np.unique(np.stack([finer.of_patch, coarser.of_patch], axis=1), axis=0)
-        assert len(pairs) == len(finer) > len(coarser)
+    for finer, parent in zip(levels, levels[1:]):  # nested: a finer cluster lies in one parent cluster
+        pairs = np.unique(np.stack([finer.of_patch, parent.of_patch], axis=1), axis=0)
+        assert len(pairs) == len(finer) > len(parent)
     assert sorted(clusters.by_cluster.tolist()) == list(range(len(patches)))
     assert clusters.members.sum() == len(patches) and np.all(clusters.members >= 1)
     for c in range(len(clusters)):
@@ -137,8 +137,8 @@ def test_a_clustered_solve_of_the_closed_cube_matches_exact_form_factors_with_fa
     scene = cube(0.9, {"ceiling": 1.0})
     reference = cube_face_reference(0.9, np.array([s.emission[0] for s in scene.surfaces]))
     settings = dict(subdiv=8, elements=2, tolerance=1e-2, refinements=0)
-    alone = solve(scene, SolveSettings(**settings, shooter_clusters=0), gpu=gpu)
-    clustered = solve(scene, SolveSettings(**settings, shooter_clusters=48), gpu=gpu)
+    alone = solve(scene, solve_settings(**settings, shooter_clusters=0), gpu=gpu)
+    clustered = solve(scene, solve_settings(**settings, shooter_clusters=48), gpu=gpu)
     work = clustered.report.details.work
     assert work.shooter_clusters == 24 and work.cluster_shots > 0.5 * clustered.report.details.shots
     assert alone.report.details.work.shooter_clusters == 0
@@ -156,8 +156,8 @@ def test_clusters_of_four_patches_keep_the_cornell_box_as_close_to_the_hemicube_
     worst surface under 6 %; with 128 clusters (8.5 patches each) the worst was 10 %."""
     scene = load_scene("cornell-box")
     settings = dict(subdiv=8, elements=1, tolerance=1e-2, refinements=0)
-    alone = solve(scene, SolveSettings(**settings, shooter_clusters=0), gpu=gpu)
-    clustered = solve(scene, SolveSettings(**settings, shooter_clusters=256), gpu=gpu)
+    alone = solve(scene, solve_settings(**settings, shooter_clusters=0), gpu=gpu)
+    clustered = solve(scene, solve_settings(**settings, shooter_clusters=256), gpu=gpu)
     assert clustered.report.details.work.cluster_shots > 0.5 * clustered.report.details.shots
     reference = cornell_hemicube
     error = {name: np.abs(face_means(solution) - reference).max(axis=1) / reference.max(axis=1)
@@ -171,7 +171,7 @@ def test_clusters_of_four_patches_keep_the_cornell_box_as_close_to_the_hemicube_
 @pytest.fixture(scope="module")
 def cornell_hemicube(gpu):
     """Per-surface means of the hemi-cube method on the Cornell box, 8 x 8 patches a surface."""
-    return face_means(solve(load_scene("cornell-box"), SolveSettings(method="hemicube", subdiv=8, hemicube_res=128,
+    return face_means(solve(load_scene("cornell-box"), solve_settings(method="hemicube", subdiv=8, hemicube_res=128,
                                                                      refinements=0), gpu=gpu))
 
 
@@ -182,7 +182,7 @@ def test_a_denser_tessellation_gets_finer_levels_of_clusters_not_more_shots(gpu,
     and its surfaces stay within 4 % of the hemi-cube's means (measured 3.4 %)."""
     scene = load_scene("cornell-box")
     settings = dict(elements=1, tolerance=3e-2, refinements=0, shooter_clusters=256)
-    coarse, dense = (solve(scene, SolveSettings(subdiv=n, **settings), gpu=gpu) for n in (8, 16))
+    coarse, dense = (solve(scene, solve_settings(subdiv=n, **settings), gpu=gpu) for n in (8, 16))
     levels = [build_clusters(subdivide(scene, n), 256) for n in (8, 16)]
     assert len(levels[1]) > len(levels[0]) and levels[1][0].members.mean() <= FINEST_MEMBERS
     shots = [solution.report.details.shots for solution in (coarse, dense)]
@@ -196,11 +196,11 @@ def test_the_cost_model_counts_clusters_not_patches_as_shooters():
 
     patches = subdivide(load_scene("cornell-box"), 12)
     assert len(patches) > 2048
-    settings = SolveSettings(shooter_clusters=1024)
+    settings = solve_settings(shooter_clusters=1024)
     clustered = predict_progressive(patches, settings).seconds
     shooters = 1024 * CLUSTERED_SHOTS
     assert clustered == pytest.approx(predict_progressive(patches, settings, shooters=shooters).seconds, rel=1e-12)
-    alone = predict_progressive(patches, SolveSettings(shooter_clusters=0)).seconds
+    alone = predict_progressive(patches, solve_settings(shooter_clusters=0)).seconds
     assert alone == pytest.approx(clustered * len(patches) / shooters, rel=1e-9)
 
 
@@ -211,8 +211,8 @@ def test_patches_facing_an_emitter_across_a_narrow_gap_shoot_alone(gpu):
     4k room's cavity came out 1.8 x too bright)."""
     scene = scene_from_dict(light_under_ceiling(0.005))
     settings = dict(method="progressive", patch_size=0.25, elements=1, refinements=5, tolerance=1e-2)
-    alone = solve(scene, SolveSettings(**settings, shooter_clusters=0), gpu=gpu)
-    clustered = solve(scene, SolveSettings(**settings, shooter_clusters=64), gpu=gpu)
+    alone = solve(scene, solve_settings(**settings, shooter_clusters=0), gpu=gpu)
+    clustered = solve(scene, solve_settings(**settings, shooter_clusters=64), gpu=gpu)
     patches = clustered.patches
     owner = cluster_owners(scene, patches)
     over = (patches.surface == 1) & (np.abs(patches.center[:, 0] - 1) < 0.15) & (np.abs(patches.center[:, 1] - 1) < 0.15)

@@ -4,9 +4,9 @@ floor, a ceiling slab resting on a wall), the surface's texels see nothing, as C
 from __future__ import annotations
 
 import numpy as np
-from scenes import box_faces, surface
+from scenes import box_faces, lightmap_settings, solve_settings, surface
 
-from radiosity_addon.core import LightmapSettings, SolveSettings, bake_lightmaps, scene_from_dict, solve
+from radiosity_addon.core import bake_lightmaps, scene_from_dict, solve
 from radiosity_addon.core.lightmap.contact import in_contact, touching_faces
 from radiosity_addon.core.lightmap.lattice import element_values
 
@@ -38,9 +38,9 @@ def test_only_faces_on_one_plane_and_facing_each_other_touch():
 
 def floor_light(gap: float, gpu):
     scene = scene_from_dict(box_on_floor(gap))
-    solution = solve(scene, SolveSettings(method="progressive", subdiv=1, elements=2, refinements=0, tolerance=1e-3),
+    solution = solve(scene, solve_settings(method="progressive", subdiv=1, elements=2, refinements=0, tolerance=1e-3),
                      gpu=gpu)
-    lightmap = bake_lightmaps(scene, solution, LightmapSettings(texel_density=32, content="light"), gpu=gpu)["floor"]
+    lightmap = bake_lightmaps(scene, solution, lightmap_settings(texel_density=32, content="light"), gpu=gpu)["floor"]
     size = lightmap.size
     v, u = np.meshgrid((np.arange(size[1]) + 0.5) / size[1], (np.arange(size[0]) + 0.5) / size[0], indexing="ij")
     points = np.stack([2 * u, 2 * v], axis=-1)

@@ -2,17 +2,16 @@
 
 import numpy as np
 import pytest
-from scenes import area_weighted_mean, closed_cube, opposed_squares, surface
+from scenes import area_weighted_mean, closed_cube, opposed_squares, solve_settings, surface
 
 from radiosity_addon.core.scene import analyse
 from radiosity_addon.core import SceneError, load_scene, scene_from_dict
-from radiosity_addon.core import SolveSettings
 from radiosity_addon.core import solve
 
 
 def solve_both(gpu, scene, **settings):
     """(analysed, full) solutions of one scene, on the same patches (no refinement)."""
-    return tuple(solve(scene, SolveSettings(method="hemicube", skip_unneeded=skip, refinements=0, **settings), gpu=gpu)
+    return tuple(solve(scene, solve_settings(method="hemicube", skip_unneeded=skip, refinements=0, **settings), gpu=gpu)
                  for skip in (True, False))
 
 
@@ -28,7 +27,7 @@ def test_grey_convex_room_one_channel_no_occlusion(gpu):
     scene = scene_from_dict(closed_cube(reflectance=0.7, emission=0.5))
     effects = analyse(scene)
     assert (effects.channels, effects.occlusion, effects.interreflection, effects.emitters) == (1, False, True, 6)
-    solution = solve(scene, SolveSettings(method="hemicube", subdiv=2, tolerance=1e-7), gpu=gpu)
+    solution = solve(scene, solve_settings(method="hemicube", subdiv=2, tolerance=1e-7), gpu=gpu)
     report = solution.report
     assert report.effects.channels == 1 and report.effects.occlusion is False and report.work.hemicubes == 0
     np.testing.assert_allclose(solution.patch_radiosity, 0.5 / (1 - 0.7), rtol=1e-4)
@@ -93,7 +92,7 @@ def test_black_patches_get_no_hemicube(gpu):
 def test_progressive_occlusion_skip_matches_visibility_maps(gpu):
     """Convex room lit by its ceiling: without visibility maps the same answer, and no maps drawn."""
     scene = scene_from_dict(closed_cube(reflectance=0.6, emitting={"ceiling"}))
-    analysed, full = (solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3, skip_unneeded=skip), gpu=gpu)
+    analysed, full = (solve(scene, solve_settings(subdiv=2, elements=2, tolerance=1e-3, skip_unneeded=skip), gpu=gpu)
                       for skip in (True, False))
     assert analysed.report.work.visibility_maps == 0
     assert full.report.work.visibility_maps == full.report.details.shots > 0
@@ -103,7 +102,7 @@ def test_progressive_occlusion_skip_matches_visibility_maps(gpu):
 
 def test_progressive_interreflection_skip_shoots_only_the_emitter(gpu):
     scene = scene_from_dict(opposed_squares(1.0))
-    analysed, full = (solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-6, skip_unneeded=skip), gpu=gpu)
+    analysed, full = (solve(scene, solve_settings(subdiv=2, elements=2, tolerance=1e-6, skip_unneeded=skip), gpu=gpu)
                       for skip in (True, False))
     assert analysed.report.details.shots == 1  # the emitter once, whole (one surface, nothing occludes)
     assert analysed.report.work.residual_updates is False
@@ -113,7 +112,7 @@ def test_progressive_interreflection_skip_shoots_only_the_emitter(gpu):
 
 def test_effects_summary_names_what_was_skipped(gpu):
     scene = scene_from_dict(closed_cube(reflectance=0.0, emitting={"ceiling"}))
-    solution = solve(scene, SolveSettings(method="hemicube", subdiv=2), gpu=gpu)
+    solution = solve(scene, solve_settings(method="hemicube", subdiv=2), gpu=gpu)
 
     line = solution.report.summary_line()
     assert line.startswith("1 channel(s) · no occlusion (skipped) · direct light only · 1 emitter(s) · 0 hemi-cubes")
@@ -122,7 +121,7 @@ def test_effects_summary_names_what_was_skipped(gpu):
 def test_progressive_channel_skip_matches_full(gpu):
     """A grey scene with an occluder: one-channel (R32F) textures give the RGB solve's answer."""
     scene = grey_room_with_occluder()
-    analysed, full = (solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3, skip_unneeded=skip), gpu=gpu)
+    analysed, full = (solve(scene, solve_settings(subdiv=2, elements=2, tolerance=1e-3, skip_unneeded=skip), gpu=gpu)
                       for skip in (True, False))
     assert analysed.report.work.channels_solved == 1 and full.report.work.channels_solved == 3
     assert analysed.report.work.texel_bytes * 4 == full.report.work.texel_bytes

@@ -11,13 +11,15 @@ from dataclasses import replace
 import moderngl
 import numpy as np
 import pytest
-from scenes import closed_cube, surface
+from scenes import closed_cube, lightmap_settings, solve_settings, surface
 
-from radiosity_addon.core import (GPU, LightmapSettings, SolveCancelled, SolveSettings, bake_lightmaps, load_scene,
+from radiosity_addon.core import (GPU, SolveCancelled, bake_lightmaps, load_scene,
                                   render_preview, scene_from_dict, solve)
 from radiosity_addon.core.gpu import bindings
 from radiosity_addon.core.gpu.resources import MAX_SPARE_BYTES
 from radiosity_addon.core.gpu.shaders import SHADERS_DIR
+
+pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
 
 
 class Injected(RuntimeError):
@@ -53,15 +55,15 @@ def lit_room():
     return scene_from_dict(data)
 
 
-PROGRESSIVE = SolveSettings(subdiv=2, elements=2, tolerance=1e-2, visibility_res=64)
-HEMICUBE = SolveSettings(method="hemicube", subdiv=2, hemicube_res=16, visibility_res=64)
+PROGRESSIVE = solve_settings(subdiv=2, elements=2, tolerance=1e-2, visibility_res=64)
+HEMICUBE = solve_settings(method="hemicube", subdiv=2, hemicube_res=16, visibility_res=64)
 
 
 @pytest.mark.parametrize("settings", [PROGRESSIVE, HEMICUBE], ids=["progressive", "hemicube"])
 def test_a_solve_lightmaps_and_preview_release_everything(watched, settings):
     scene = lit_room()
     solution = solve(scene, settings, gpu=watched)
-    lightmaps = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16), gpu=watched)
+    lightmaps = bake_lightmaps(scene, solution, lightmap_settings(texel_density=16), gpu=watched)
     render_preview(scene, lightmaps, width=32, height=32, gpu=watched)
     assert leaked(watched) == []
     assert len(watched.ctx.objects) > 0  # released objects passed through: the check saw them
@@ -110,7 +112,7 @@ def test_a_failure_in_any_solve_stage_releases_everything(watched, monkeypatch, 
 def test_a_failure_while_baking_lightmaps_or_rendering_the_preview_releases_everything(watched, monkeypatch, target):
     scene = lit_room()
     solution = solve(scene, HEMICUBE, gpu=watched)
-    lightmaps = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16), gpu=watched)
+    lightmaps = bake_lightmaps(scene, solution, lightmap_settings(texel_density=16), gpu=watched)
     calls = []
 
     def broken_on_the_second_call(*args, **kwargs):
@@ -126,7 +128,7 @@ def test_a_failure_while_baking_lightmaps_or_rendering_the_preview_releases_ever
         if "preview" in target:
             render_preview(scene, lightmaps, width=32, height=32, gpu=watched)
         else:
-            bake_lightmaps(scene, solution, LightmapSettings(texel_density=16), gpu=watched)
+            bake_lightmaps(scene, solution, lightmap_settings(texel_density=16), gpu=watched)
     assert leaked(watched) == []
 
 
@@ -206,3 +208,17 @@ def test_an_opengl_too_old_says_what_was_found_and_what_is_needed():
     message = done.stdout.strip()
     assert re.match(r"this machine offers OpenGL 4\.1 \(.+\); the bake needs OpenGL 4\.3", message), done
     assert "apt-get" not in message and "\n" not in message
+
+
+def test_an_opengl_error_fails_the_gpu_that_made_it():
+    """The tests run with the driver's log on (conftest): an error is raised when its GPU closes,
+    one line naming it; a GPU closing on an exception of its own does not hide that exception."""
+    from radiosity_addon.core.gpu.debug import GLReportedProblem
+    invalid_capability = 0x1234
+    with pytest.raises(GLReportedProblem, match="GL_INVALID_ENUM"):
+        with GPU() as gpu:
+            gpu.ctx.enable_direct(invalid_capability)
+    with pytest.raises(Injected):
+        with GPU() as gpu:
+            gpu.ctx.enable_direct(invalid_capability)
+            raise Injected()

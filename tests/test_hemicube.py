@@ -2,19 +2,20 @@
 
 import numpy as np
 import pytest
-from scenes import (area_weighted_mean, closed_cube, opposed_rectangles_form_factor, opposed_squares,
-                    perpendicular_squares)
+from scenes import area_weighted_mean, closed_cube, opposed_rectangles_form_factor, opposed_squares, perpendicular_squares, solve_settings
 
 from radiosity_addon.core import hemicube, visibility
 from radiosity_addon.core.hemicube import linear_solvers
 from radiosity_addon.core import subdivide
 from radiosity_addon.core import scene_from_dict
-from radiosity_addon.core import SolveError, SolveSettings
+from radiosity_addon.core import SolveError
 from radiosity_addon.core import solve
+
+pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
 
 SOLVERS = ["jacobi-gpu", "jacobi-cpu", "gauss-seidel"]
 # subdivided 8 x 8, 2 x 2 hemi-cubes per patch, no refinement: the patches the test names
-HEMICUBES_AT_256 = SolveSettings(method="hemicube", subdiv=8, hemicube_res=256, skip_unneeded=False, refinements=0)
+HEMICUBES_AT_256 = solve_settings(method="hemicube", subdiv=8, hemicube_res=256, skip_unneeded=False, refinements=0)
 
 
 def test_opposed_rectangle_formula_matches_design_values():
@@ -66,7 +67,7 @@ def test_one_patch_takes_the_mean_of_its_direct_light_not_its_centres(gpu, skip_
     where the centre-point factor is 20 % more (above). With skips off it is drawn by hemi-cubes, on:
     nothing occludes, and it is the analytic kernel; either way F carries only the reflected light."""
     scene = scene_from_dict(opposed_squares(1.0))
-    settings = SolveSettings(method="hemicube", subdiv=1, hemicube_res=64, hemicube_elements=1,
+    settings = solve_settings(method="hemicube", subdiv=1, hemicube_res=64, hemicube_elements=1,
                              skip_unneeded=skip_unneeded, refinements=0)
     solution = solve(scene, settings, gpu=gpu)
     receiver = np.flatnonzero(solution.patches.surface == 0)
@@ -93,7 +94,7 @@ def test_furnace(gpu, solver, reflectance, skip_unneeded):
     """Closed cube, uniform ρ and E: B = E/(1 − ρ). Analysed, the convex grey cube is solved
     with analytic unoccluded form factors on one channel; with skips off, by hemi-cubes."""
     scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
-    settings = SolveSettings(method="hemicube", subdiv=3, hemicube_res=64, solver=solver, tolerance=1e-6,
+    settings = solve_settings(method="hemicube", subdiv=3, hemicube_res=64, solver=solver, tolerance=1e-6,
                              skip_unneeded=skip_unneeded, hemicube_elements=1)
     solution = solve(scene, settings, gpu=gpu)
     assert solution.report.work.hemicubes == (0 if skip_unneeded else 54)
@@ -104,7 +105,7 @@ def test_solvers_agree_on_cornell_box(gpu):
     from radiosity_addon.core import load_scene
 
     scene = load_scene("cornell-box")
-    results = [solve(scene, SolveSettings(method="hemicube", subdiv=2, hemicube_res=64, solver=s,
+    results = [solve(scene, solve_settings(method="hemicube", subdiv=2, hemicube_res=64, solver=s,
                                           tolerance=1e-7), gpu=gpu).patch_radiosity for s in SOLVERS]
     scale = results[1].max()
     for other in (results[0], results[2]):
@@ -247,7 +248,7 @@ def test_bright_columns_replace_only_far_thinly_sampled_entries(gpu):
     reflected = np.ones((len(patches), 3))
     reflected[bright] = 1000.0  # 71 % of the power reflected
     rows = np.arange(len(patches))
-    settings = SolveSettings(visibility_res=256)
+    settings = solve_settings(visibility_res=256)
     element_rows = np.zeros((len(patches), len(patches)), dtype=np.float32)
     element_rows[[near, far], bright] = WELL_SAMPLED / 2
     assert shoot_bright_columns(gpu, scene, patches, element_rows, rows, 1, reflected, settings).tolist() == [bright]

@@ -11,14 +11,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from scenes import solve_settings, lightmap_settings
+
 from radiosity_addon import core
-from radiosity_addon.core import (LightmapSettings, SceneError, Solution, SolveError, SolveSettings, bilinear,
+from radiosity_addon.core import (SceneError, Solution, SolveError, bilinear,
                                   load_scene, scene_from_dict, solve, subdivide)
 from radiosity_addon.core.imaging import dilate
 from radiosity_addon.core.lightmap import gl_mip_count
 from radiosity_addon.core.lightmap.lattice import lattice_parameters
 from radiosity_addon.core.lightmap.size import MIN_SIZE, resolve_size
 from radiosity_addon.core.settings import LIGHTMAP_GUTTER as GUTTER
+
+pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
 
 CORNELL_DENSITY = 128.0  # texels per metre: 7.8 mm texels
 FINE_DENSITY = 256.0  # the demo's density: the smallest Cornell faces (block sides) ~41 texels across
@@ -28,7 +32,7 @@ def bake_lightmaps(scene, solution, texel_density=CORNELL_DENSITY, gpu=None, obj
     """core.bake_lightmaps with this file's defaults (128 texels per metre, up to 2048 texels, B)."""
     # these tests follow the interpolation of B (the direct light per texel is tested in test_texel_light.py)
     settings = {"max_size": 2048, "content": "combined", "direct_per_texel": False, **settings}
-    return core.bake_lightmaps(scene, solution, LightmapSettings(texel_density=texel_density, **settings), gpu=gpu,
+    return core.bake_lightmaps(scene, solution, lightmap_settings(texel_density=texel_density, **settings), gpu=gpu,
                                objects=objects)
 
 
@@ -39,7 +43,7 @@ def cornell():
 
 @pytest.fixture(scope="module")
 def cornell_solution(cornell, gpu):
-    return solve(cornell, SolveSettings(method="hemicube", subdiv=4, hemicube_res=64), gpu=gpu)
+    return solve(cornell, solve_settings(method="hemicube", subdiv=4, hemicube_res=64), gpu=gpu)
 
 
 def element_geometry(patches, elements: int):

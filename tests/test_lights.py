@@ -4,14 +4,13 @@ import math
 
 import numpy as np
 import pytest
-from scenes import surface
+from scenes import solve_settings, surface
 
 from radiosity_addon.core.scene import analyse
 from radiosity_addon.core.hemicube.method import element_means
 from radiosity_addon.core.shooting import element_areas, element_centers
 from radiosity_addon.core import point_to_polygon
 from radiosity_addon.core import SceneError, scene_from_dict
-from radiosity_addon.core import SolveSettings
 from radiosity_addon.core import solve
 from radiosity_addon.core.scene import subdivide
 from radiosity_addon.core.shooting.direct import sky_light
@@ -38,7 +37,7 @@ def floor_elements(solution, elements):
 
 
 def progressive(scene, gpu, elements=4, **settings):
-    return solve(scene, SolveSettings(subdiv=2, elements=elements, **settings), gpu=gpu)
+    return solve(scene, solve_settings(subdiv=2, elements=elements, **settings), gpu=gpu)
 
 
 POINT = {"name": "bulb", "type": "point", "position": [0.2, -0.1, 1.0], "color": [1.0, 0.5, 0.25], "power": 100.0}
@@ -63,7 +62,7 @@ def test_point_lamp_through_the_hemicube_method(gpu):
     """The lamp's light on every hemi-cube element (2 x 2 a patch) is the analytic one, averaged
     over the element's 2 x 2 of the 4 x 4 points its patch measures the direct light at."""
     scene = floor_scene([POINT])
-    solution = solve(scene, SolveSettings(method="hemicube", subdiv=4, refinements=0, hemicube_elements=2), gpu=gpu)
+    solution = solve(scene, solve_settings(method="hemicube", subdiv=4, refinements=0, hemicube_elements=2), gpu=gpu)
     patches = solution.patches
     points = element_centers(patches, 4)
     analytic = point_lamp_radiance(points.reshape(-1, 3), POINT).reshape(len(patches), 4, 4, 3)
@@ -180,4 +179,4 @@ def test_lamps_in_the_scene_analysis():
 ])
 def test_bad_lamps_are_refused_by_name(gpu, light, fault):
     with pytest.raises(SceneError, match=fault):
-        solve(floor_scene([{"name": "L", **light}]), SolveSettings(subdiv=1, elements=1), gpu=gpu)
+        solve(floor_scene([{"name": "L", **light}]), solve_settings(subdiv=1, elements=1), gpu=gpu)

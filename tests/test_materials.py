@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scenes import surface
+from scenes import lightmap_settings, solve_settings, surface
 
-from radiosity_addon.core import (LightmapSettings, MaterialMap, SolveSettings, bake_lightmaps, lightmap_sizes,
+from radiosity_addon.core import (MaterialMap, bake_lightmaps, lightmap_sizes,
                                   scene_from_dict, solve, surfaces_with_material_maps)
 from radiosity_addon.core.uvspace import footprint_means
 
@@ -43,9 +43,9 @@ def test_footprint_means_average_the_texels_inside():
 
 def test_light_and_combined_lightmaps_relate_as_b_equals_e_plus_rho_h(gpu):
     scene = scene_from_dict(lit_floor())
-    solution = solve(scene, SolveSettings(subdiv=4, elements=2, tolerance=1e-4), gpu=gpu)
-    light = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16), gpu=gpu)["floor"]
-    combined = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16, content="combined"),
+    solution = solve(scene, solve_settings(subdiv=4, elements=2, tolerance=1e-4), gpu=gpu)
+    light = bake_lightmaps(scene, solution, lightmap_settings(texel_density=16), gpu=gpu)["floor"]
+    combined = bake_lightmaps(scene, solution, lightmap_settings(texel_density=16, content="combined"),
                               gpu=gpu)["floor"]
     inside = light.patch_index >= 0
     assert light.content == "light" and combined.content == "combined"
@@ -53,25 +53,25 @@ def test_light_and_combined_lightmaps_relate_as_b_equals_e_plus_rho_h(gpu):
     np.testing.assert_allclose(combined.rgba[inside][:, :3], 0.5 * light.rgba[inside][:, :3], rtol=1e-5)
     # H holds what reaches a black floor too, where B is 0
     black = scene_from_dict(lit_floor(reflectance=0.0))
-    black_solution = solve(black, SolveSettings(subdiv=4, elements=2, tolerance=1e-4), gpu=gpu)
-    black_light = bake_lightmaps(black, black_solution, LightmapSettings(texel_density=16), gpu=gpu)["floor"]
+    black_solution = solve(black, solve_settings(subdiv=4, elements=2, tolerance=1e-4), gpu=gpu)
+    black_light = bake_lightmaps(black, black_solution, lightmap_settings(texel_density=16), gpu=gpu)["floor"]
     np.testing.assert_allclose(black_light.rgba[inside][:, :3], light.rgba[inside][:, :3], rtol=1e-4)
 
 
 def test_a_checker_texture_shows_texel_by_texel_in_combined_and_averages_in_transport(gpu):
     plain = scene_from_dict(lit_floor())
-    settings = LightmapSettings(texel_density=16, content="combined")
+    settings = lightmap_settings(texel_density=16, content="combined")
     size = lightmap_sizes(plain, settings)["floor"]
     albedo = checker(size)
     maps = {"floor": MaterialMap(albedo=albedo, emission=np.zeros_like(albedo))}
     textured = surfaces_with_material_maps(gpu, plain, maps)
     assert textured.reflectance[0] == pytest.approx([0.5] * 3, abs=0.02)  # the checker's mean
-    solution = solve(textured, SolveSettings(subdiv=4, elements=2, tolerance=1e-4), gpu=gpu)
+    solution = solve(textured, solve_settings(subdiv=4, elements=2, tolerance=1e-4), gpu=gpu)
     # each 0.5 m patch covers one checker square: its reflectance is that square's albedo
     floor = (solution.patches.surface == 0) & ~solution.patches.is_back
     assert set(np.round(solution.patches.reflectance[floor, 0], 2)) == {0.2, 0.8}
     combined = bake_lightmaps(textured, solution, settings, gpu=gpu)["floor"]
-    light = bake_lightmaps(textured, solution, LightmapSettings(texel_density=16), gpu=gpu)["floor"]
+    light = bake_lightmaps(textured, solution, lightmap_settings(texel_density=16), gpu=gpu)["floor"]
     inside = combined.patch_index >= 0
     np.testing.assert_allclose(combined.rgba[inside][:, :3], albedo[inside] * light.rgba[inside][:, :3], rtol=1e-5)
     # the light reaching the floor is smooth, the combined map shows the checker
@@ -88,7 +88,7 @@ def test_an_emission_map_lights_the_scene_by_its_mean():
     data["surfaces"][1]["emission"] = [0, 0, 0]
     data["surfaces"].append(surface("spare", [[3, 0, 0], [4, 0, 0], [4, 1, 0], [3, 1, 0]], 0.5, 1.0))
     scene = scene_from_dict(data)
-    size = lightmap_sizes(scene, LightmapSettings(texel_density=16))["lamp"]
+    size = lightmap_sizes(scene, lightmap_settings(texel_density=16))["lamp"]
     emission = np.zeros((size[1], size[0], 3), dtype=np.float32)
     emission[: size[1] // 2] = 2.0  # the half with v < 0.5
     maps = {"lamp": MaterialMap(albedo=np.zeros_like(emission), emission=emission)}

@@ -3,7 +3,6 @@ with the run's preset and overrides, at the sizes the reference is baked at."""
 
 from __future__ import annotations
 
-import dataclasses
 import importlib.util
 from pathlib import Path
 
@@ -39,8 +38,8 @@ def test_a_run_is_the_solver_process_bake_with_the_run_settings(tmp_path, gpu):
     assert solution.report.method == "hemicube" and solution.report.settings.refinements == 1
     assert solution.report.settings.patch_size == QUALITY_PRESETS["draft"]["solve"]["patch_size"]
     settings = core.SolveSettings.preset("draft", method="hemicube", refinements=1)
-    expected_lightmaps = dataclasses.replace(lightmaps, content="combined",
-                                             **(QUALITY_PRESETS["draft"]["lightmaps"] | {"direct_subsamples": 1}))
+    expected_lightmaps = core.LightmapSettings(quality="draft", texel_density=16.0, content="combined",
+                                              direct_subsamples=1)
     expected = child.lightmap_images(scene, core.solve(scene, settings, gpu=gpu), scene.object_names,
                                      expected_lightmaps, gpu)
     sizes = tool.lightmap_sizes(job)

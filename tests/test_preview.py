@@ -6,10 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from scenes import solve_settings, lightmap_settings
+
 from radiosity_addon import cli
-from radiosity_addon.core import (LightmapSettings, SolveSettings, bake_lightmaps, load_scene, render_preview,
+from radiosity_addon.core import (bake_lightmaps, load_scene, render_preview,
                                   save_preview, solve)
 from radiosity_addon.core.imaging import dilate
+
+pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec. 709
 
@@ -20,8 +24,8 @@ def test_cornell_preview_shows_colour_bleeding_and_the_light_is_brightest(gpu, t
     strip next to the green wall greener; the light's pixels are the brightest surface."""
     image_module = pytest.importorskip("matplotlib.image")
     cornell = load_scene("cornell-box")
-    solution = solve(cornell, SolveSettings(method="hemicube", subdiv=4, hemicube_res=64), gpu=gpu)
-    lightmaps = bake_lightmaps(cornell, solution, LightmapSettings(texel_density=128.0), gpu=gpu)
+    solution = solve(cornell, solve_settings(method="hemicube", subdiv=4, hemicube_res=64), gpu=gpu)
+    lightmaps = bake_lightmaps(cornell, solution, lightmap_settings(texel_density=128.0), gpu=gpu)
     preview = render_preview(cornell, lightmaps, width=256, height=256, gpu=gpu)
     path = tmp_path / "cornell.png"
     save_preview(path, cornell, preview)

@@ -11,14 +11,17 @@ import pytest
 
 from oracles import patch_shooter, visibility_misclassification
 from oracles import point_to_clipped_polygon as point_polygon_form_factor
-from scenes import CUBE_FACES, opposed_rectangles_form_factor
+from scenes import CUBE_FACES, opposed_rectangles_form_factor, solve_settings
 
-from radiosity_addon.core import SolveSettings, load_scene, scene_from_dict, solve, subdivide
+from radiosity_addon.core import load_scene, scene_from_dict, solve, subdivide
 from radiosity_addon.core.imaging import pad_tiles
 from radiosity_addon.core.progressive import BATCH_POWER_FLOOR, ResidualReader
 from radiosity_addon.core.scene.geometry import polygon_area_vector, unit
-from radiosity_addon.core.shooting import (ElementLayout, ElementTextures, PatchBuffers, PatchShooters, ShootingPass,
+from radiosity_addon.core.shooting import (ElementTextures, PatchBuffers, PatchShooters, ShootingPass,
                                            ShotVisibility, element_areas, element_centers)
+
+pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
+
 
 def cube(reflectance: float, emission: dict) -> object:
     return scene_from_dict({"surfaces": [
@@ -179,7 +182,7 @@ def test_a_batch_of_shots_adds_what_each_adds_alone(gpu):
 
 def test_furnace_exact_kernel_within_2_percent(gpu):
     scene = cube(0.9, {name: 1.0 for name in CUBE_FACES})
-    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=2e-3), gpu=gpu)
+    solution = solve(scene, solve_settings(subdiv=2, elements=2, tolerance=2e-3), gpu=gpu)
     elements = solution.element_radiosity
     assert solution.report.details.kernel == "exact"
     assert np.all(np.abs(elements / 10.0 - 1) < 0.02), (elements.min(), elements.max())
@@ -189,7 +192,7 @@ def test_furnace_exact_kernel_within_2_percent(gpu):
 def test_furnace_disk_kernel_loses_energy(gpu):
     """The dissertation's disk approximation leaks in a closed box: kept selectable, not default."""
     scene = cube(0.9, {name: 1.0 for name in CUBE_FACES})
-    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=2e-3, kernel="disk"), gpu=gpu)
+    solution = solve(scene, solve_settings(subdiv=2, elements=2, tolerance=2e-3, kernel="disk"), gpu=gpu)
     energy = solution.report.details.energy
     assert energy["escaped"] > 0.05 * energy["emitted"]
     assert solution.patch_radiosity.mean() < 9.0
@@ -200,7 +203,7 @@ def lit_cube(gpu):
     """Closed cube, ρ = 0.9, emitting ceiling; records the progress callback (one pass: no refinement)."""
     scene = cube(0.9, {"ceiling": 1.0})
     calls = []
-    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3, refinements=0), gpu=gpu,
+    solution = solve(scene, solve_settings(subdiv=2, elements=2, tolerance=1e-3, refinements=0), gpu=gpu,
                      progress=lambda fraction, message, details: calls.append((fraction, dict(details))))
     # the method's own reports (the solve's stages report too: core.timing.StagePlan)
     return scene, solution, [(details["stage_fraction"], details) for _, details in calls if "unshot_fraction" in details]
@@ -283,8 +286,8 @@ def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(gpu):
     method measured the direct light at points).
     """
     scene = load_scene("cornell-box")
-    hemicube = solve(scene, SolveSettings(method="hemicube", subdiv=8, hemicube_res=128, hemicube_elements=2), gpu=gpu)
-    progressive = solve(scene, SolveSettings(subdiv=8, elements=2, tolerance=1e-2), gpu=gpu)
+    hemicube = solve(scene, solve_settings(method="hemicube", subdiv=8, hemicube_res=128, hemicube_elements=2), gpu=gpu)
+    progressive = solve(scene, solve_settings(subdiv=8, elements=2, tolerance=1e-2), gpu=gpu)
     reference = face_means(hemicube)
     difference = np.abs(face_means(progressive) - reference).max(axis=1) / reference.max(axis=1)
     names = [s.name for s in scene.surfaces]
@@ -298,9 +301,9 @@ def test_cancel_and_shot_budget(gpu):
     scene = cube(0.5, {"ceiling": 1.0})
     calls = []
     with pytest.raises(SolveCancelled):
-        solve(scene, SolveSettings(subdiv=1, elements=1), gpu=gpu,
+        solve(scene, solve_settings(subdiv=1, elements=1), gpu=gpu,
               should_cancel=lambda: calls.append(1) or len(calls) > 3)
-    solution = solve(scene, SolveSettings(subdiv=1, elements=1, max_shots=2, tolerance=1e-6), gpu=gpu)
+    solution = solve(scene, solve_settings(subdiv=1, elements=1, max_shots=2, tolerance=1e-6), gpu=gpu)
     assert solution.report.details.shots == 2 and solution.report.details.stop_reason == "max_shots"
     assert solution.report.details.unshot_fraction > 1e-6
 
@@ -330,7 +333,7 @@ def test_preview_snapshots_carry_the_ambient_term_and_converge_to_the_result(gpu
     total reflected power (area-weighted) approaches the result's as the unshot power shrinks."""
     scene = cube(0.5, {"ceiling": 1.0})
     snapshots = []
-    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-4), gpu=gpu,
+    solution = solve(scene, solve_settings(subdiv=2, elements=2, tolerance=1e-4), gpu=gpu,
                      preview=snapshots.append, preview_interval=0.0)
     assert len(snapshots) >= solution.report.details.work.batches  # every batch of shots, with interval 0
     area = solution.patches.area
@@ -352,7 +355,7 @@ def test_the_estimate_of_time_left_errs_long_rather_than_short(gpu):
     from radiosity_addon.core.progressive.ledger import time_left
 
     calls = []
-    solve(load_scene("cornell-box"), SolveSettings(subdiv=4, elements=2, tolerance=1e-3, refinements=0), gpu=gpu,
+    solve(load_scene("cornell-box"), solve_settings(subdiv=4, elements=2, tolerance=1e-3, refinements=0), gpu=gpu,
           progress=lambda fraction, message, details: calls.append(dict(details)))
     calls = [details for details in calls if "phase" in details]  # the method's own reports
     bounces = [details for details in calls if details["phase"] == "bounces"]
@@ -375,7 +378,7 @@ def test_the_remainders_completion_halves_the_error_of_a_loose_tolerance(gpu):
     scene = load_scene("cornell-box")
 
     def means(**settings):
-        solution = solve(scene, SolveSettings(subdiv=4, elements=2, refinements=0, **settings), gpu=gpu)
+        solution = solve(scene, solve_settings(subdiv=4, elements=2, refinements=0, **settings), gpu=gpu)
         return np.array([area_weighted_mean(solution, i).sum() for i in range(len(scene))]), solution
 
     converged, _ = means(tolerance=1e-5, complete_remainder=False)

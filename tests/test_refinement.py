@@ -4,9 +4,9 @@ millimetres from another surface (a light plane under a ceiling)."""
 from __future__ import annotations
 
 import numpy as np
-from scenes import light_under_ceiling, opposed_squares, surface
+from scenes import light_under_ceiling, opposed_squares, solve_settings, surface
 
-from radiosity_addon.core import SolveSettings, scene_from_dict, solve, subdivide
+from radiosity_addon.core import scene_from_dict, solve, subdivide
 from radiosity_addon.core.refinement import GAP_RESOLUTION, MIN_CUT, outline_cuts, within_budget
 from radiosity_addon.core.scene.gaps import facing_gaps
 from radiosity_addon.core.scene import split_patches
@@ -25,7 +25,7 @@ def test_facing_gaps_measure_the_distance_to_the_facing_plane():
 def test_refinement_resolves_the_gap_along_the_emitters_outline_only(gpu):
     gap = 0.01
     scene = scene_from_dict(light_under_ceiling(gap))
-    solution = solve(scene, SolveSettings(patch_size=0.5, elements=2, refinements=6, tolerance=1e-2), gpu=gpu)
+    solution = solve(scene, solve_settings(patch_size=0.5, elements=2, refinements=6, tolerance=1e-2), gpu=gpu)
     patches = solution.patches
     ceiling = (patches.surface == 1) & ~patches.is_back
     size = np.sqrt(patches.area[ceiling])
@@ -43,7 +43,7 @@ def test_the_gap_at_an_emitter_is_resolved_near_its_opening_even_where_no_light_
     `emitter_gap_resolution` gaps, and not in the middle of the gap nor far from the emitter."""
     gap, resolution = 0.005, 4.0
     scene = scene_from_dict(light_under_ceiling(gap))
-    solution = solve(scene, SolveSettings(patch_size=0.5, elements=2, refinements=6, tolerance=1e-2,
+    solution = solve(scene, solve_settings(patch_size=0.5, elements=2, refinements=6, tolerance=1e-2,
                                           emitter_gap_resolution=resolution), gpu=gpu)
     patches = solution.patches
     size = np.sqrt(patches.area)
@@ -90,7 +90,7 @@ def test_no_ceiling_patch_lies_astride_the_outline_of_an_emitter_under_it(gpu):
     x0, x1, y0, y1 = 0.71, 1.17, 0.83, 1.29
     room["surfaces"][2]["vertices"] = [[x, y, 2.0 - gap] for x, y in [[x0, y0], [x1, y0], [x1, y1], [x0, y1]]][::-1]
     scene = scene_from_dict(room)
-    solution = solve(scene, SolveSettings(method="hemicube", patch_size=2.0, refinements=6, tolerance=1e-2,
+    solution = solve(scene, solve_settings(method="hemicube", patch_size=2.0, refinements=6, tolerance=1e-2,
                                           emitter_gap_resolution=8.0), gpu=gpu)
     patches = solution.patches
     ceiling = patches.corners[(patches.surface == 1) & ~patches.is_back]
@@ -123,7 +123,7 @@ def test_hemicubes_see_an_emitter_four_millimetres_away_in_a_large_scene(gpu):
     data["surfaces"].append(surface("far", [[5, 0, 0], [5, 0, 1], [5, 1, 1], [5, 1, 0]], 0.0, 0.0))
     scene = scene_from_dict(data)
     assert np.linalg.norm(scene.bounds[1] - scene.bounds[0]) > 5.0
-    solution = solve(scene, SolveSettings(method="hemicube", subdiv=4, hemicube_res=64, refinements=0,
+    solution = solve(scene, solve_settings(method="hemicube", subdiv=4, hemicube_res=64, refinements=0,
                                           skip_unneeded=False), gpu=gpu)
     receiver = ~solution.patches.is_back & (solution.patches.surface == 0)
     inner = receiver & (np.abs(solution.patches.center[:, :2] - 0.5).max(axis=1) < 0.3)
@@ -151,7 +151,7 @@ def test_each_round_probes_only_the_patches_it_made_and_the_probe_is_the_ray_cas
                              + [surface(f"box {k}", c, 0.5, 0.0, obj="box") for k, c in enumerate(box_faces(low, high))]
                              + [surface("emitter", emitter, 0.0, 10.0)]})
     effects, backs = effects_for(scene, True)
-    settings = SolveSettings(patch_size=0.5)
+    settings = solve_settings(patch_size=0.5)
     patches = subdivide(scene, None, 0.5, backs)
     shooters = probe_shooters(scene, patches, effects)
     light = probe_light(gpu, scene, patches, np.arange(len(patches)), shooters, settings, effects, 4)
@@ -192,7 +192,7 @@ def test_the_hemicube_method_measures_only_the_direct_light_refinement_did_not(g
 
     scene = scene_from_dict(light_under_ceiling(0.01))
     effects, backs = effects_for(scene, True)
-    settings = SolveSettings(method="hemicube", patch_size=0.5, elements=1, hemicube_elements=1, refinements=2,
+    settings = solve_settings(method="hemicube", patch_size=0.5, elements=1, hemicube_elements=1, refinements=2,
                              probe_pieces=4)
     patches, refined, measured = refine(gpu, scene, subdivide(scene, None, 0.5, backs), backs, settings, effects,
                                         StageTimer())

@@ -13,7 +13,7 @@ Why each case is hard (also in the README, "Hard cases"):
 
 import numpy as np
 import pytest
-from scenes import closed_cube, opposed_squares, perpendicular_squares, surface
+from scenes import closed_cube, opposed_squares, perpendicular_squares, solve_settings, surface
 
 from radiosity_addon.core.hemicube import linear_solvers
 from radiosity_addon.core import point_to_polygon
@@ -27,7 +27,7 @@ SOLVERS = ["jacobi-gpu", "jacobi-cpu", "gauss-seidel"]
 def hemicube(**overrides) -> SolveSettings:
     """The full original method (no analytic shortcuts), small enough for tests."""
     settings = dict(method="hemicube", subdiv=2, hemicube_res=32, skip_unneeded=False)
-    return SolveSettings(**(settings | overrides))
+    return solve_settings(**(settings | overrides))
 
 
 def assert_physical(solution):
@@ -75,7 +75,7 @@ def test_closed_box_analytic_kernel_bias_is_bounded(gpu):
     and the bias is ρ(1 − row sum)/(1 − ρ): bounded, never a blow-up."""
     reflectance = 0.99
     scene = scene_from_dict(closed_cube(reflectance=reflectance, emission=1.0))
-    solution = solve(scene, SolveSettings(method="hemicube", subdiv=4, solver="gauss-seidel",
+    solution = solve(scene, solve_settings(method="hemicube", subdiv=4, solver="gauss-seidel",
                                           tolerance=1e-7), gpu=gpu)
     assert_physical(solution)
     row_sum = solution.report.details.form_factor_row_sum["min"]
@@ -226,7 +226,7 @@ def test_long_thin_sliver_has_no_spikes(gpu):
 
 def progressive(**overrides) -> SolveSettings:
     settings = dict(method="progressive", subdiv=1, elements=2)
-    return SolveSettings(**(settings | overrides))
+    return solve_settings(**(settings | overrides))
 
 
 def test_progressive_closed_box_high_reflectance_stops_at_budget_from_below(gpu):

@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scenes import box_faces, surface
+from scenes import box_faces, lightmap_settings, solve_settings, surface
 
-from radiosity_addon.core import (LightmapSettings, SolveSettings, bake_lightmaps, point_to_polygon,
+from radiosity_addon.core import (bake_lightmaps, point_to_polygon,
                                   scene_from_dict, solve, subdivide)
 from radiosity_addon.core.lightmap.direct import direct_light, matched_map_resolution
 
@@ -42,9 +42,9 @@ def test_an_emitters_light_at_every_texel_is_lamberts_formula(gpu, method):
     floor = {**surface("floor", FLOOR, 0.5, 0.0), "uv": UV}
     emitter = {**surface("emitter", emitter_corners, 0.0, 2.0), "uv": UV}
     scene = scene_from_dict({"surfaces": [floor, emitter]})
-    settings = SolveSettings(method=method, subdiv=1, elements=1, hemicube_res=32, tolerance=1e-4)
+    settings = solve_settings(method=method, subdiv=1, elements=1, hemicube_res=32, tolerance=1e-4)
     solution = solve(scene, settings, gpu=gpu)
-    lightmap = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16), gpu=gpu)["floor"]
+    lightmap = bake_lightmaps(scene, solution, lightmap_settings(texel_density=16), gpu=gpu)["floor"]
     inside = lightmap.patch_index >= 0
     lambert = lambda points: 2.0 * point_to_polygon(  # noqa: E731
         points.reshape(-1, 3), np.tile([0, 0, 1.0], (points[..., 0].size, 1)),
@@ -66,8 +66,8 @@ def test_a_suns_shadow_is_as_sharp_as_the_lightmap(gpu):
     data = {"surfaces": [{**surface("floor", FLOOR, 0.5, 0.0), "uv": UV},
                          {**surface("plate", plate, 0.5, 0.0), "uv": UV}], "lights": [sun]}
     scene = scene_from_dict(data)
-    solution = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-3), gpu=gpu)
-    lightmap = bake_lightmaps(scene, solution, LightmapSettings(texel_density=32), gpu=gpu)["floor"]
+    solution = solve(scene, solve_settings(subdiv=2, elements=2, tolerance=1e-3), gpu=gpu)
+    lightmap = bake_lightmaps(scene, solution, lightmap_settings(texel_density=32), gpu=gpu)["floor"]
     inside = lightmap.patch_index >= 0
     points = texel_centres(lightmap.size, FLOOR)
     shadowed = (points[..., 0] > 0.6) & (points[..., 0] < 1.1) & (points[..., 1] > 0.6) & (points[..., 1] < 1.1)
@@ -127,9 +127,9 @@ def test_no_light_leaks_under_a_box_and_its_penumbra_is_texel_sharp(gpu, method)
                 + [surface(f"box {k}", corners, 0.0, 0.0, obj="box") for k, corners in enumerate(box_faces(low, high))]
                 + [surface("emitter", emitter_corners, 0.0, 10.0)])
     scene = scene_from_dict({"surfaces": surfaces})
-    solution = solve(scene, SolveSettings(method=method, subdiv=1, elements=2, hemicube_res=64, refinements=0),
+    solution = solve(scene, solve_settings(method=method, subdiv=1, elements=2, hemicube_res=64, refinements=0),
                      gpu=gpu)
-    lightmap = bake_lightmaps(scene, solution, LightmapSettings(texel_density=64), gpu=gpu)["floor"]
+    lightmap = bake_lightmaps(scene, solution, lightmap_settings(texel_density=64), gpu=gpu)["floor"]
     inside = lightmap.patch_index >= 0
     points = texel_centres(lightmap.size, FLOOR)[inside]
     measured = lightmap.rgba[inside][:, 0]
@@ -160,7 +160,7 @@ def test_the_solves_own_direct_light_keeps_penumbrae_and_leaks_nowhere(gpu):
     emitter_corners = [[0.75, 0.75, 1.0], [0.75, 1.25, 1.0], [1.25, 1.25, 1.0], [1.25, 0.75, 1.0]]
     scene = scene_from_dict({"surfaces": [surface("floor", FLOOR, 0.0, 0.0), *box,
                                           surface("emitter", emitter_corners, 0.0, 10.0)]})
-    solution = solve(scene, SolveSettings(patch_size=0.5, elements=8, refinements=0), gpu=gpu)
+    solution = solve(scene, solve_settings(patch_size=0.5, elements=8, refinements=0), gpu=gpu)
     floor = np.flatnonzero(solution.patches.surface == 0)
     points = element_centers(solution.patches, 8)[floor].reshape(-1, 3)
     areas = element_areas(solution.patches, 8)[floor].reshape(-1)
@@ -188,8 +188,8 @@ def test_the_light_trapped_over_an_emitters_back_is_counted_once(gpu, method):
                     light_reflectance, emission)
     light["two_sided"] = True
     scene = scene_from_dict({"surfaces": [floor, ceiling, light]})
-    solution = solve(scene, SolveSettings(method=method, patch_size=0.5, refinements=4, tolerance=1e-3), gpu=gpu)
-    lightmap = bake_lightmaps(scene, solution, LightmapSettings(texel_density=16, content="light"), gpu=gpu)["ceiling"]
+    solution = solve(scene, solve_settings(method=method, patch_size=0.5, refinements=4, tolerance=1e-3), gpu=gpu)
+    lightmap = bake_lightmaps(scene, solution, lightmap_settings(texel_density=16, content="light"), gpu=gpu)["ceiling"]
     centres = texel_centres(lightmap.size, ceiling_corners)
     middle = (np.abs(centres[..., 0] - 1.0) < 0.1) & (np.abs(centres[..., 1] - 1.0) < 0.1) & (lightmap.patch_index >= 0)
     assert middle.sum() >= 4
@@ -243,12 +243,12 @@ def test_a_bake_shoots_its_direct_light_at_the_matched_resolution(gpu, monkeypat
     emitter_corners = [[0.75, 0.75, 0.4], [0.75, 1.25, 0.4], [1.25, 1.25, 0.4], [1.25, 0.75, 0.4]]
     scene = scene_from_dict({"surfaces": [{**surface("floor", FLOOR, 0.5, 0.0), "uv": UV},
                                           {**surface("emitter", emitter_corners, 0.0, 2.0), "uv": UV}]})
-    solution = solve(scene, SolveSettings(method="hemicube", subdiv=1, elements=1, hemicube_res=32), gpu=gpu)
+    solution = solve(scene, solve_settings(method="hemicube", subdiv=1, elements=1, hemicube_res=32), gpu=gpu)
     used = []
     real = lightmap_bake.direct_light
     monkeypatch.setattr(lightmap_bake, "direct_light",
                         lambda *args, **kw: used.append(args[7]) or real(*args, **kw))
-    settings = LightmapSettings(texel_density=16)
+    settings = lightmap_settings(texel_density=16)
     bake_lightmaps(scene, solution, settings, gpu=gpu)
     sizes = lightmap_bake.lightmap_sizes(scene, settings)  # floor ~32 texels a side + gutters, emitter >= 8
     finest = min(np.sqrt(area / np.prod(sizes[name])) for name, area in (("floor", 4.0), ("emitter", 0.25)))

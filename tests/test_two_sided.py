@@ -5,16 +5,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scenes import area_weighted_mean, opposed_rectangles_form_factor, surface
+from scenes import area_weighted_mean, opposed_rectangles_form_factor, solve_settings, surface
 
-from radiosity_addon.core import SolveSettings, scene_from_dict, solve
+from radiosity_addon.core import scene_from_dict, solve
 from radiosity_addon.core.scene import analyse
 from radiosity_addon.core.scene.analysis import simulated_backs
 
 SQUARE = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]  # faces +z
 METHODS = {
-    "hemicube": SolveSettings(method="hemicube", subdiv=8, hemicube_res=128, tolerance=1e-7),
-    "progressive": SolveSettings(subdiv=4, elements=4, tolerance=1e-5),
+    "hemicube": solve_settings(method="hemicube", subdiv=8, hemicube_res=128, tolerance=1e-7),
+    "progressive": solve_settings(subdiv=4, elements=4, tolerance=1e-5),
 }
 
 
@@ -95,9 +95,9 @@ def test_backs_of_a_closed_mesh_are_skipped_and_change_nothing(gpu):
     assert not backs[names == "ceiling"].any() and not backs[names == "floor"].any()  # nothing behind them
     effects = analyse(scene)
     assert (effects.back_sides, effects.back_sides_skipped) == (0, 8)
-    settings = SolveSettings(subdiv=2, elements=2, tolerance=1e-4, refinements=0)  # the same patches both ways
+    settings = solve_settings(subdiv=2, elements=2, tolerance=1e-4, refinements=0)  # the same patches both ways
     skipped = solve(scene, settings, gpu=gpu)
-    everything = solve(scene, SolveSettings(subdiv=2, elements=2, tolerance=1e-4, skip_unneeded=False,
+    everything = solve(scene, solve_settings(subdiv=2, elements=2, tolerance=1e-4, skip_unneeded=False,
                                             refinements=0), gpu=gpu)
     fronts = ~skipped.patches.is_back
     assert np.allclose(skipped.patch_radiosity[fronts], everything.patch_radiosity[~everything.patches.is_back],

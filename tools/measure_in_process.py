@@ -31,7 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import bpy  # noqa: E402,F401  (the reference bakes with Cycles)
 
 from radiosity_addon import core  # noqa: E402
-from radiosity_addon.bench import blend_lightmaps, blend_reference, compare  # noqa: E402
+from bench import blend_lightmaps, blend_reference, compare  # noqa: E402
 from radiosity_addon.core.settings import QUALITY_PRESETS  # noqa: E402
 from radiosity_addon.solver_process import protocol  # noqa: E402
 
@@ -52,8 +52,10 @@ def run_once(job, run: dict):
     overrides = {key: value for key, value in run.items() if key != "lightmaps"}
     quality = overrides.pop("quality", "good")
     settings = core.SolveSettings.preset(quality, **overrides)
-    lightmaps = dataclasses.replace(lightmap_settings, content="combined",
-                                    **(QUALITY_PRESETS[quality]["lightmaps"] | run.get("lightmaps", {})))
+    # the preset's lightmap knobs, but the job's texel density: the texels the reference is baked at
+    knobs = {key: value for key, value in QUALITY_PRESETS[quality]["lightmaps"].items() if key != "texel_density"}
+    lightmaps = dataclasses.replace(lightmap_settings, content="combined", quality=quality,
+                                    **(knobs | run.get("lightmaps", {})))
     solved = solve_job(scene, settings, lightmaps, objects)
     return solved["solution"], solved["images"], solved["solve"], solved["lightmaps"]
 

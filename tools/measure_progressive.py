@@ -17,7 +17,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from radiosity_addon.bench.scenes import CUBE_FACES  # noqa: E402
+from bench.scenes import CUBE_FACES  # noqa: E402
 from radiosity_addon.core import GPU, SolveSettings, load_scene, scene_from_dict, solve  # noqa: E402
 
 
@@ -28,8 +28,8 @@ def furnace(gpu, args):
     for kernel in ("exact", "disk"):
         for subdiv in args.subdiv:
             started = time.perf_counter()
-            solution = solve(scene, SolveSettings(subdiv=subdiv, elements=args.elements, tolerance=args.tolerance,
-                                                  kernel=kernel), gpu=gpu)
+            solution = solve(scene, SolveSettings(method="progressive", quality="final", subdiv=subdiv,
+                                                  elements=args.elements, tolerance=args.tolerance, kernel=kernel), gpu=gpu)
             b = solution.element_radiosity[..., 0]
             area = solution.patches.area
             mean = float((area * solution.patch_radiosity[:, 0]).sum() / area.sum())
@@ -45,8 +45,8 @@ def speed(gpu, args):
     scene = load_scene(args.scene)
     for elements in args.elements:
         for subdiv in args.subdiv:
-            solution = solve(scene, SolveSettings(subdiv=subdiv, elements=elements, max_shots=args.shots,
-                                                  tolerance=1e-9), gpu=gpu)
+            solution = solve(scene, SolveSettings(method="progressive", quality="final", subdiv=subdiv,
+                                                  elements=elements, max_shots=args.shots, tolerance=1e-9), gpu=gpu)
             r = solution.report.to_dict()
             t = r["timings"]
             loop = sum(t.get(k, 0.0) for k in ("select", "visibility", "shoot", "mipmap"))

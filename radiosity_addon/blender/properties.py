@@ -5,10 +5,10 @@ from __future__ import annotations
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
 
-from ..core import MAX_LIGHTMAP_SIZE, PATCH_SIZE, TEXEL_DENSITY, LightmapSettings, SolveSettings
+from ..core import DEFAULT_QUALITY, MAX_LIGHTMAP_SIZE, PATCH_SIZE, TEXEL_DENSITY, LightmapSettings, SolveSettings
 from .options import BakeOptions
 
-_DEFAULTS = SolveSettings.preset("good")  # what the panel starts with: auto, good
+_DEFAULTS = SolveSettings()  # what the panel starts with: the default preset
 _OPTIONS = BakeOptions()
 
 METHOD_ITEMS = [
@@ -64,7 +64,7 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
     tolerance: FloatProperty(name="Tolerance", min=0.0, max=0.5, default=0.0, precision=6, step=0.01,
                              description="Stop when the unshot power (progressive) or the change per sweep"
                                          " (hemi-cube) falls under this fraction; 0 uses the method's default")
-    texel_density: FloatProperty(name="Texel Density", min=0.0, soft_max=1024.0, default=0.0,
+    texel_density: FloatProperty(name="Texel Density", min=0.0, soft_max=1024.0, default=LightmapSettings().texel_density,
                                  description="Lightmap texels per metre (objects without a resolution override);"
                                              f" 0: automatic, the quality's texel budget over the baked"
                                              f" surfaces, at least {TEXEL_DENSITY:g}")
@@ -86,7 +86,7 @@ class RadiositySceneSettings(bpy.types.PropertyGroup):
         """The panel's settings, and the resolution overrides of `objects`, as a plain object."""
         overrides = {obj.name: obj.radiosity.lightmap_resolution for obj in objects
                      if obj.radiosity.lightmap_resolution > 0}
-        quality = "good" if self.quality == "CUSTOM" else self.quality
+        quality = DEFAULT_QUALITY if self.quality == "CUSTOM" else self.quality
         if self.quality == "CUSTOM":
             solve = SolveSettings(method=self.method, quality=quality,
                                   subdiv=self.subdivision if self.patch_mode == "SUBDIVISION" else None,

@@ -29,10 +29,10 @@ Solving
 solve(scene, settings=None, progress=None, should_cancel=None, gpu=None, preview=None,
       preview_interval=2.0, timer=None) -> Solution
     scene          the Scene to solve.
-    settings       SolveSettings (None: SolveSettings(), the dataclass's own defaults: progressive,
-                   final's tolerance, 128-pixel hemi-cubes; the command line and the panel start
-                   from SolveSettings.preset("good") instead, `auto` method):
-                   method "progressive" | "hemicube"; subdiv N (every surface N x N) or, with
+    settings       SolveSettings (None: SolveSettings(), the default preset "good", as the
+                   command line and the panel; SolveSettings(quality="draft") is the whole draft
+                   preset, and any field given overrides the preset's value):
+                   method "auto" | "progressive" | "hemicube"; subdiv N (every surface N x N) or, with
                    subdiv None, patch_size (scene units); elements S (S x S per patch,
                    progressive); hemicube_res; solver "gauss-seidel" (default) |
                    "jacobi-gpu" | "jacobi-cpu"; tolerance (None: the method's default); max_iterations;
@@ -58,8 +58,9 @@ Solution               patches, patch_radiosity (P, 3), element_radiosity (P, S,
 Lightmaps and preview
 ---------------------
 bake_lightmaps(scene, solution, settings=None, gpu=None, objects=None, progress=None) -> {object name: Lightmap}
-    settings       LightmapSettings (None: LightmapSettings()): texel_density (texels per scene
-                   unit; 0: automatic, the preset's texel_budget over the baked area), max_size,
+    settings       LightmapSettings (None: LightmapSettings(), the default preset's; quality= and
+                   overrides as SolveSettings): texel_density (texels per scene unit; 0, every
+                   preset's: automatic, the preset's texel_budget over the baked area), max_size,
                    resolution_overrides {object: side or (w, h)}, power_of_two, gutter, and
                    content: "light" (default) — the light H arriving, B = E + ρH, shown as
                    emission + albedo x lightmap — or "combined", B itself (per texel from the
@@ -105,7 +106,7 @@ from .report import Report
 from .scene.geometry import bilinear
 from .scene import (MAX_REFLECTANCE, FaceNames, MaterialMap, OpacityMaps, Patches, Scene, Surface, bundled_scene_names, check_has_emitter, load_scene, polygon_faults,
                     save_scene, scene_from_dict, subdivide)
-from .settings import (CONTENTS, DEFAULT_TOLERANCE, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, PATCH_SIZE, QUALITIES,
+from .settings import (CONTENTS, DEFAULT_QUALITY, KERNELS, MAX_LIGHTMAP_SIZE, METHODS, PATCH_SIZE, QUALITIES,
                        QUALITY_PRESETS, SHOOTING_POINTS, SOLVE_METHODS, SOLVERS, TEXEL_DENSITY, VISIBILITY_VARIANTS,
                        LightmapSettings, SolveSettings)
 from .solution import Solution
@@ -114,7 +115,7 @@ from .timing import StageTimer
 from .uvspace import surfaces_with_material_maps
 
 __all__ = [
-    "CONTENTS", "Camera", "Convergence", "DEFAULT_TOLERANCE", "FaceNames", "GLUnavailable", "GPU", "KERNELS", "OpacityMaps", "Lightmap", "LightmapSettings", "MAX_REFLECTANCE", "MaterialMap",
+    "CONTENTS", "Camera", "Convergence", "DEFAULT_QUALITY", "FaceNames", "GLUnavailable", "GPU", "KERNELS", "OpacityMaps", "Lightmap", "LightmapSettings", "MAX_REFLECTANCE", "MaterialMap",
     "MAX_LIGHTMAP_SIZE", "METHODS", "PATCH_SIZE", "Patches", "QUALITIES", "QUALITY_PRESETS", "SOLVE_METHODS", "Preview", "Report", "SHOOTING_POINTS", "SOLVERS",
     "Scene", "SceneError", "Solution", "SolveCancelled", "SolveError", "SolveSettings", "StageTimer", "Surface", "TEXEL_DENSITY",
     "USER_ERRORS", "VISIBILITY_VARIANTS", "bake_lightmaps", "bilinear", "bundled_scene_names", "check_has_emitter",
