@@ -24,8 +24,8 @@ SAMPLES = ROOT / "sample_blends"
 CORNELL = SAMPLES / "cornell_box.blend"
 ROOM = SAMPLES / "room.blend"
 SAMPLES_MADE = SAMPLES / ".made"  # `make samples` and ensure_samples() touch it
-SAMPLE_SOURCES = (ROOT / "tools/make_sample_blends.py", ROOT / "radiosity_addon/bench/blend_scenes.py",
-                  ROOT / "radiosity_addon/bench/shapes.py")
+SAMPLE_SOURCES = (ROOT / "tools/make_sample_blends.py", ROOT / "bench/blend_scenes.py",
+                  ROOT / "bench/shapes.py")
 
 
 def ensure_samples() -> None:

@@ -15,10 +15,10 @@ import bpy
 import numpy as np
 import pytest
 
-from radiosity_addon.bench import blend_reference, compare
-from radiosity_addon.bench.blend_scenes import (add_lamp, diffuse_material, lightmap_pack, mesh_object, reset,
+from bench import blend_reference, compare
+from bench.blend_scenes import (add_lamp, diffuse_material, lightmap_pack, mesh_object, reset,
                                                 save_blend)
-from radiosity_addon.bench.shapes import box
+from bench.shapes import box
 
 SUN_STRENGTH, SUN_FROM_ZENITH = 3.0, 30.0  # degrees; the sun turns about x
 REFLECTANCE, EMISSION = (0.6, 0.4, 0.2), (0.1, 0.2, 0.3)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from radiosity_addon.bench import compare
+from bench import compare
 
 
 def image(*texels):
@@ -138,7 +138,7 @@ def test_without_reference_noise_takes_the_noise_out_of_the_squared_error():
 
 
 def test_pictures_show_ours_cycles_and_the_signed_difference(tmp_path):
-    from radiosity_addon.bench import pictures
+    from bench import pictures
     reference = np.ones((8, 16, 4))
     reference[..., :3] = 0.5
     ours = reference.copy()

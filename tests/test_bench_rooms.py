@@ -11,7 +11,7 @@ import bpy
 import numpy as np
 import pytest
 
-from radiosity_addon.bench import blend_lightmaps, blend_reference, compare, room_layout, rooms
+from bench import blend_lightmaps, blend_reference, compare, room_layout, rooms
 from radiosity_addon.blender.headless import HeadlessBake, bake_file
 from radiosity_addon.blender.lights import world_colour
 
@@ -113,7 +113,7 @@ def test_world_colour_is_a_sky_the_addon_reads():
 
 def test_command_line_saves_a_room(tmp_path):
     path = tmp_path / "room.blend"
-    result = subprocess.run([sys.executable, "-m", "radiosity_addon.bench.rooms", "--triangles", "1000",
+    result = subprocess.run([sys.executable, "-m", "bench.rooms", "--triangles", "1000",
                              "--output", str(path)], capture_output=True, text=True, cwd=support.ROOT, timeout=120)
     assert result.returncode == 0, result.stderr[-2000:]
     triangles = room_layout.predicted_triangles(room_layout.detail_for(1000))

@@ -11,7 +11,7 @@ from __future__ import annotations
 import blender_support as support
 import bpy
 
-from radiosity_addon.bench.cycles import bake_object
+from bench.cycles import bake_object
 from radiosity_addon.blender.tags import CREATED_UV
 
 # per object and channel, relative to Cycles' mean: measured -0.7 ... +2.9 % against Cycles at

@@ -48,8 +48,12 @@ def test_extension_builds_validates_installs_and_bakes(tmp_path):
         assert sorted(n.split("-")[2] for n in names if n.startswith(f"wheels/{package}-")) == \
             ["cp311", "cp313", "cp314"]
     assert build_extension.check_zip(linux_zip) == []
-    assert not any(n.startswith(("tests/", "sample_blends/", "tools/", "docs/", ".", "radiosity_addon/bench/"))
-                   or "__pycache__" in n for n in names)  # only what users need ships
+    assert not any(n.startswith(("tests/", "sample_blends/", "tools/", "docs/", ".", "bench/"))
+                   or "__pycache__" in n or n.endswith(".md") for n in names)  # only what users need ships
+    shipped = {n for n in names if n.startswith("radiosity_addon/")}
+    assert {n for n in shipped if not n.endswith(".json")} == \
+        {p.relative_to(support.ROOT).as_posix() for p in (support.ROOT / "radiosity_addon").rglob("*.py")
+         if "__pycache__" not in p.parts}  # every module, and nothing beside the code but bundled scenes
     assert any(n.startswith("shaders/include/") for n in names)
     assert not any(n.startswith("wheels/numpy") for n in names)
 

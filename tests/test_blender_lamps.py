@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 from mathutils import Vector
 
-from radiosity_addon.bench.blend_scenes import box, diffuse_material, mesh_object, reset
-from radiosity_addon.bench.cycles import bake_object
+from bench.blend_scenes import box, diffuse_material, mesh_object, reset
+from bench.cycles import bake_object
 from radiosity_addon.blender.errors import BakeError
 from radiosity_addon.blender.export import check_emitters, export_scene
 from radiosity_addon.blender.lights import export_lights, render_lamps

@@ -9,8 +9,8 @@ import blender_support as support
 import bpy
 import numpy as np
 
-from radiosity_addon.bench.blend_scenes import diffuse_material, mesh_object, reset
-from radiosity_addon.bench.cycles import bake_object
+from bench.blend_scenes import diffuse_material, mesh_object, reset
+from bench.cycles import bake_object
 from radiosity_addon.blender.export import export_scene
 from radiosity_addon.blender.lightmap_uv import add_lightmap_uvs
 from radiosity_addon.blender.opacity import bake_opacity, lets_light_through

@@ -35,7 +35,7 @@ import bpy
 import numpy as np
 import pytest
 
-from radiosity_addon.bench import blend_lightmaps, blend_reference, compare
+from bench import blend_lightmaps, blend_reference, compare
 from radiosity_addon.blender.bake import bake_blocking
 from radiosity_addon.blender.headless import HeadlessBake, bake_file
 from radiosity_addon.blender.tags import lightmap_image_name

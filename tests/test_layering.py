@@ -6,7 +6,8 @@ function-level imports included):
   neither method imports the other;
 - outside the core (command line, Blender side, benchmark) only the core's public API
   (`radiosity_addon.core`) is imported, never a core module;
-- `bpy` is imported only in radiosity_addon/blender/ and the dev-only radiosity_addon/bench/;
+- `bpy` is imported only in radiosity_addon/blender/ and the dev-only bench/;
+- the shipped package imports nothing from bench/ (which the zip leaves out);
 - no Python file is longer than MAX_LINES.
 """
 
@@ -19,6 +20,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "radiosity_addon"
+BENCH = ROOT / "bench"  # the benchmarks: beside the package, never shipped
 CORE = "radiosity_addon.core"
 MAX_LINES = 420
 
@@ -55,7 +57,7 @@ def module_name(path: Path) -> str:
 
 
 def source_files() -> dict[str, Path]:
-    return {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+    return {module_name(p): p for p in sorted(PACKAGE.rglob("*.py")) + sorted(BENCH.rglob("*.py"))}
 
 
 MODULES = source_files()
@@ -148,11 +150,17 @@ def test_outside_the_core_only_the_public_api_is_imported():
 
 
 def test_bpy_only_in_the_blender_side_and_the_bench():
-    allowed = ("radiosity_addon.blender", "radiosity_addon.bench")
+    allowed = ("radiosity_addon.blender", "bench")
     bad = [name for name, targets in GRAPH.items()
            if any(t == "bpy" or t.startswith(("bpy.", "mathutils", "bl_")) for t in targets)
            and not name.startswith(allowed)]
     assert not bad, f"bpy imported by {bad}"
+
+
+def test_the_shipped_package_never_imports_the_bench():
+    bad = [f"{name} imports {target}" for name, targets in GRAPH.items() if name.startswith("radiosity_addon")
+           for target in targets if target == "bench" or target.startswith("bench.")]
+    assert not bad, "; ".join(bad)
 
 
 def test_the_extension_entry_imports_nothing_at_module_level():
@@ -161,7 +169,7 @@ def test_the_extension_entry_imports_nothing_at_module_level():
 
 
 def test_no_python_file_is_too_long():
-    files = list(PACKAGE.rglob("*.py")) + list((ROOT / "tests").glob("*.py")) + list((ROOT / "tools").glob("*.py"))
+    files = [*PACKAGE.rglob("*.py"), *BENCH.rglob("*.py"), *(ROOT / "tests").glob("*.py"), *(ROOT / "tools").glob("*.py")]
     long = {str(p.relative_to(ROOT)): n for p in files if (n := len(p.read_text().splitlines())) > MAX_LINES}
     assert not long, long
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from radiosity_addon import core
-from radiosity_addon.bench import production
+from bench import production
 from radiosity_addon.blender.export import export_scene
 from radiosity_addon.blender.lights import render_lamps
 from radiosity_addon.core.scene.face_clusters import cluster_faces

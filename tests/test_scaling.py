@@ -1,6 +1,6 @@
 """Every stage of a bake grows about linearly with the scene: the benchmark's furnished room at
 ~1.2k and ~3.9k triangles (3.2 x), baked stage by stage as the add-on bakes it
-(radiosity_addon/bench/scaling.py), each stage's time compared as a ratio. The progressive solve
+(bench/scaling.py), each stage's time compared as a ratio. The progressive solve
 runs a fixed number of shots, so its per-shot cost is what is compared; that a denser scene needs
 no more shots is test_clusters.py's (the Cornell box at 4 x the patches), the rooms' counts the
 bench's (tools/measure_scaling.py). The hemi-cube method's form factors are O(P^2)
@@ -11,7 +11,7 @@ from __future__ import annotations
 import blender_support  # noqa: F401  (sets BLENDER_USER_RESOURCES before bpy loads)
 import pytest
 
-from radiosity_addon.bench.scaling import bake_room_in_stages
+from bench.scaling import bake_room_in_stages
 
 GROWTH = 1.3  # a stage may take at most (size ratio)^GROWTH the time (quadratic: ratio^2 = 10 x here)
 FLOOR = 0.5  # seconds a stage may add whatever the ratio: start-up costs, and the scene analysis's

@@ -9,14 +9,22 @@ name exactly what was downloaded, so a version bump that forgets the manifest fa
 not in Blender; and every zip must hold one wheel of each requirement for each Python on its
 platform, since Blender refuses to enable an extension without wheels for its own Python.
 Blender's own tool (`blender_ext.py`, carried by the bpy wheel) builds and validates.
+
+What ships is an explicit list: the files SHIPPED matches (the entry, the licence, the package's
+code and bundled scenes, the shaders), copied with the manifest and the wheels into a staging
+folder that Blender's tool builds from; nothing else is there to leave out. (Blender 5.0's tool
+cannot take the list as the manifest's `[build] paths`: with wheels and one zip per platform it
+takes the wrong entries for the wheels.)
 """
 
 from __future__ import annotations
 
 import argparse
+import shutil
 import importlib.util
 import subprocess
 import sys
+import tempfile
 import tomllib
 import zipfile
 from pathlib import Path
@@ -25,6 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 WHEELS_DIR = ROOT / "wheels"
 REQUIREMENTS = ("moderngl==5.13.0", "glcontext==3.1.0")
 PYTHON_VERSIONS = ("3.11", "3.13", "3.14")
+SHIPPED = ("__init__.py", "LICENSE", "radiosity_addon/**/*.py", "radiosity_addon/**/*.json", "shaders/**/*.*")
 # Blender platform -> pip platform tags (pip picks the best wheel among them)
 PLATFORM_TAGS = {
     "linux-x64": ["manylinux_2_28_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64",
@@ -62,6 +71,24 @@ def download_wheels(listed: set[str]) -> set[str]:
                 sys.exit(f"error: pip could not download the wheels for Python {python} {tags[0]}:"
                          f" {errors[0] if errors else result.stderr.strip()[-300:]}")
     return {f"./wheels/{path.name}" for path in WHEELS_DIR.glob("*.whl")}
+
+
+def shipped_files() -> list[str]:
+    """The files SHIPPED matches, relative to the repository, without Python's caches."""
+    found = {path.relative_to(ROOT).as_posix() for pattern in SHIPPED for path in ROOT.glob(pattern)
+             if path.is_file() and "__pycache__" not in path.parts}
+    return sorted(found)
+
+
+def stage(directory: Path) -> Path:
+    """Copy what ships, the manifest and the wheels it lists into `directory`; return it."""
+    manifest = tomllib.loads((ROOT / "blender_manifest.toml").read_text())
+    for relative in [*shipped_files(), "blender_manifest.toml",
+                     *(wheel.removeprefix("./") for wheel in manifest.get("wheels", []))]:
+        target = directory / relative
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(ROOT / relative, target)
+    return directory
 
 
 def manifest_wheels() -> set[str]:
@@ -129,8 +156,10 @@ def main(argv=None) -> int:
     prefix = f"{manifest['id']}-{manifest['version']}"
     for old in output.glob(f"{prefix}-*.zip"):
         old.unlink()
-    run(script, "validate", str(ROOT))
-    run(script, "build", "--source-dir", str(ROOT), "--output-dir", str(output), "--split-platforms")
+    with tempfile.TemporaryDirectory() as staging:
+        source = stage(Path(staging))
+        run(script, "validate", str(source))
+        run(script, "build", "--source-dir", str(source), "--output-dir", str(output), "--split-platforms")
     zips = sorted(output.glob(f"{prefix}-*.zip"))
     if len(zips) != len(manifest["platforms"]):
         sys.exit(f"error: expected one zip per platform ({', '.join(manifest['platforms'])}), got"

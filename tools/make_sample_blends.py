@@ -47,9 +47,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from radiosity_addon.bench.blend_scenes import (add_camera, add_lamp, box, diffuse_material,  # noqa: E402
+from bench.blend_scenes import (add_camera, add_lamp, box, diffuse_material,  # noqa: E402
                                                 lightmap_pack, looking_at, mesh_object, reset, select_meshes)
-from radiosity_addon.bench.shapes import box_between, merge  # noqa: E402
+from bench.shapes import box_between, merge  # noqa: E402
 
 CORNELL_JSON = ROOT / "radiosity_addon/core/scene/scenes/cornell-box.json"
 OUT_DIR = ROOT / "sample_blends"

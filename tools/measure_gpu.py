@@ -124,7 +124,7 @@ def solve(args) -> int:
 def compare_results(args) -> int:
     import bpy
 
-    from radiosity_addon.bench import blend_lightmaps, blend_reference, compare
+    from bench import blend_lightmaps, blend_reference, compare
 
     results = [(out, json.loads((out / "timings.json").read_text())) for out in args.outputs]
     print("| job | run | " + " | ".join(f"{record['machine']['renderer'][:40]}: s (solve + lightmaps) / texel RMS"

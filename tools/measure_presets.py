@@ -47,9 +47,9 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 from mathutils import Vector  # noqa: E402
 
-from radiosity_addon.bench import blend_lightmaps, blend_reference, compare, foliage, pictures  # noqa: E402
-from radiosity_addon.bench.production import PRODUCTION_PROPERTY  # noqa: E402
-from radiosity_addon.bench.rooms import ROOM_PROPERTY  # noqa: E402
+from bench import blend_lightmaps, blend_reference, compare, foliage, pictures  # noqa: E402
+from bench.production import PRODUCTION_PROPERTY  # noqa: E402
+from bench.rooms import ROOM_PROPERTY  # noqa: E402
 from radiosity_addon.blender import worker  # noqa: E402
 from radiosity_addon.blender.headless import HeadlessBake, bake_file, ensure_registered  # noqa: E402
 from radiosity_addon.blender.lightmap_uv import add_lightmap_uvs  # noqa: E402

@@ -1,7 +1,7 @@
-"""Measurements of the benchmark's furnished rooms (radiosity_addon/bench/rooms.py) for a report:
+"""Measurements of the benchmark's furnished rooms (bench/rooms.py) for a report:
 the room family (triangle target -> real triangles, build time), the add-on's bake of one room by
 both methods at the file's (default) settings, and Cycles' reference of it at two sample counts,
-compared on the same texels (radiosity_addon/bench/compare.py).
+compared on the same texels (bench/compare.py).
 
     .venv/bin/python tools/measure_rooms.py --output-dir out/rooms [--triangles 4000] [--samples 64 1024]
 
@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import bpy  # noqa: E402
 
-from radiosity_addon.bench import blend_lightmaps, blend_reference, compare, rooms  # noqa: E402
+from bench import blend_lightmaps, blend_reference, compare, rooms  # noqa: E402
 from radiosity_addon.blender.headless import HeadlessBake, bake_file  # noqa: E402
 
 FAMILY = (1000, 2000, 4000, 8000, 16000, 32000, 64000, 100000)

@@ -1,5 +1,5 @@
 """How each stage of a bake grows with the scene: seconds and peak memory per stage on the
-benchmark's furnished rooms (radiosity_addon/bench/rooms.py) from ~1k to ~100k triangles, or on its
+benchmark's furnished rooms (bench/rooms.py) from ~1k to ~100k triangles, or on its
 production terrace (bench/production.py: dense meshes, 20 materials in one object, a triangle
 soup, alpha-cut leaves, sun and sky) from ~50k to ~500k.
 
@@ -8,7 +8,7 @@ soup, alpha-cut leaves, sun and sky) from ~50k to ~500k.
         [--cycles 64] [--family production --objects 10]
 
 Every (room, method) runs in a process of its own, which builds the room and bakes it stage by
-stage as the add-on does (radiosity_addon/bench/scaling.py: export, material maps, the core
+stage as the add-on does (bench/scaling.py: export, material maps, the core
 solve's stages, lightmaps, write-back), each stage's seconds and peak resident memory recorded.
 After each room's first bake, Cycles bakes the same room (built again, saved in DIR) into
 lightmaps of the same sizes at `--cycles` samples per texel, in a process of its own (0: not).
@@ -122,14 +122,14 @@ def main() -> int:
         write_results(args.output_dir, json.loads((args.output_dir / "scaling.json").read_text()))
         return 0
     if args.one:
-        from radiosity_addon.bench.scaling import bake_production_in_stages, bake_room_in_stages
+        from bench.scaling import bake_production_in_stages, bake_room_in_stages
         solve = {"quality": args.quality, "method": args.one[1]}
         run = (bake_production_in_stages(int(args.one[0]), solve, args.objects) if args.family == "production"
                else bake_room_in_stages(int(args.one[0]), solve))
         print(json.dumps(run, default=float))
         return 0
     if args.one_cycles:
-        from radiosity_addon.bench.scaling import bake_room_with_cycles
+        from bench.scaling import bake_room_with_cycles
         sizes = json.loads(Path(args.one_cycles[1]).read_text())
         print(json.dumps(bake_room_with_cycles(int(args.one_cycles[0]), sizes, args.cycles, args.output_dir,
                                                args.family, args.objects), default=float))

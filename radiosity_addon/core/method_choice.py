@@ -1,19 +1,17 @@
 """`--method auto`: the method predicted faster for these patches, from a cost model whose
-constants `python -m radiosity_addon.bench.calibrate` measured on the development machine (2 cores,
-llvmpipe; a faster GPU scales both methods' costs alike to first order, so the choice holds).
+constants `python -m bench.calibrate` measures (a faster GPU scales both methods'
+costs alike to first order, so the choice holds).
 
 Progressive refinement: shots ~ SHOTS_PER_PATCH(tolerance) x shooters, each drawing a hemi-cube
 (pixels, and every triangle on each of 5 faces) and gathered by every element. The shooters are
 the patches, or at most `shooter_clusters` when the patches are more (clusters shoot as one, and
 as the unshot light weakens whole coarse clusters shoot: CLUSTERED_SHOTS of the shots per patch
-each; draft on the 3.9k- and 15.8k-triangle rooms, 7 007 and 23 424 patches, took 1 888 and
-1 792 shots, the model says 1 813 for both).
+each).
 Hemi-cube method: a hemi-cube per receiving element (S_h^2 per patch) over the triangles its
 atlas draws (a surface of many patches is drawn once and looked up: visibility/item_geometry.py;
-the 4k room's 7 793 patches are 13 976 triangles, 5 080 drawn; each face draws only the clusters of
-them its frustum reaches: visibility/face_culling.py), then Jacobi sweeps over the P x P
-matrix (~log(tolerance) / log(mean reflectance) sweeps); its matrices must fit the memory limit,
-else it is not a choice at all.
+each face draws only the clusters of them its frustum reaches: visibility/face_culling.py), then
+Jacobi sweeps over the P x P matrix (~log(tolerance) / log(mean reflectance) sweeps); its
+matrices must fit the memory limit, else it is not a choice at all.
 """
 
 from __future__ import annotations
@@ -29,20 +27,15 @@ from .settings import SolveSettings
 from .shooting.shots import hemicube_resolution
 from .visibility.item_geometry import item_geometry
 
-# measured by python -m radiosity_addon.bench.calibrate (2 cores, llvmpipe; load average 5.5, the
-# development machine busy with other jobs: absolute numbers ~2-3x high, their ratios hold)
-# a hemi-cube drawn, reduced, read back: measured on the idle machine since the lookup's record rides on
-# the vertices (docs/architecture.md), per pixel on the Cornell box's draft (838 32-px hemi-cubes over 32
-# drawn triangles, 0.34 s), per drawn triangle and face on the 4k room's good (7 793 over 5 080: 17.5 s
-# when every face drew every triangle, 10.8-13.3 s since each face draws only the clusters of triangles
-# its frustum reaches, about a third: visibility/face_culling.py). A progressive shot's hemi-cube is culled
-# alike; SHOT_SECONDS are from before it, not measured since: progressive may be predicted slower than it is
+# python -m bench.calibrate's costs of a hemi-cube drawn, reduced and read back (per
+# pixel, per drawn triangle and face). SHOT_SECONDS predate face culling, which a progressive shot's
+# hemi-cube has too: progressive may be predicted slower than it is
 HEMICUBE_SECONDS = {"pixel": 1.27e-07, "triangle": 4.6e-08}
 SHOT_SECONDS = {"pixel": 5.18e-09, "triangle": 1.21e-07, "element": 3.4e-07}  # a progressive shot
 SECONDS_PER_MATRIX_ENTRY_SWEEP = 3.93e-09
 SHOTS_PER_PATCH = {0.01: 2.62, 0.003: 3.56, 0.001: 4.40}  # progressive, Cornell box, by tolerance
-# clustered shots per shots_per_patch x shooter_clusters, measured on the bench's rooms (draft:
-# 0.52 at 3.9k triangles, 0.49 at 15.8k; progressive/clusters.py)
+# clustered shots per shots_per_patch x shooter_clusters (progressive/clusters.py): about alike at
+# every size of the bench's rooms
 CLUSTERED_SHOTS = 0.5
 ELEMENT_BYTES = 2 * 16 + 8  # light and residual texels (RGBA32F) and their share of the patch buffers
 
@@ -136,10 +129,10 @@ def choose_method(patches: Patches, settings: SolveSettings, shooters: int | Non
     return MethodChoice(chosen, reason, table)
 
 
-# the solve's other stages, for the time-left estimate (timing.StagePlan), measured on the production
-# terrace (bench/production.py) at 50k and 300k triangles, 2 cores, llvmpipe: seconds per face for the
-# faces' material means, clustering and the analysis; per patch probed and per surface in each of the
-# sky's direction maps for a refinement round; per patch for a method before it is chosen
+# the solve's other stages, for the time-left estimate (timing.StagePlan), calibrated on the production
+# terrace (bench/production.py): seconds per face for the faces' material means, clustering and the
+# analysis; per patch probed and per surface in each of the sky's direction maps for a refinement
+# round; per patch for a method before it is chosen
 STAGE_SECONDS = {"materials": 1.5e-6, "cluster": 1.5e-5, "analyse": 6.5e-6, "refine_patch": 4e-4,
                  "sky_surface": 5e-7, "method_patch": 1.5e-3}
 REFINED_SHARE = 0.3  # of the patches a refinement round after the first probes again (those it split)

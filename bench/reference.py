@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import Scene
+from radiosity_addon.core import Scene
 from . import metrics, scenes
 
 

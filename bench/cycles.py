@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from ..blender.material_bake import quiet_stdout
+from radiosity_addon.blender.material_bake import quiet_stdout
 
 QUAD_UV = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
 TRIANGLE_UV = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]

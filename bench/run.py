@@ -1,4 +1,4 @@
-"""`python -m radiosity_addon bench`: the accuracy-vs-time sweep and the dissertation's Table 5.1."""
+"""`python -m bench`: the accuracy-vs-time sweep and the dissertation's Table 5.1."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..core import load_scene, open_gpu
+from radiosity_addon.core import load_scene, open_gpu
 from . import report, sweep, table51
 from .scenes import ANALYTIC_SCENES
 

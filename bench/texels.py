@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core import Patches, Scene, bilinear
+from radiosity_addon.core import Patches, Scene, bilinear
 
 EDGE_TEXELS = 2
 SUPERSAMPLES = 4  # per texel side: our piecewise-constant answer is averaged over the texel like a bake

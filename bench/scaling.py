@@ -20,12 +20,12 @@ from pathlib import Path
 
 import bpy
 
-from .. import core
-from ..blender import apply
-from ..blender.bake import baked_materials, choose_objects
-from ..blender.export import export_scene
-from ..blender.headless import ensure_registered
-from ..blender.lights import render_lamps
+from radiosity_addon import core
+from radiosity_addon.blender import apply
+from radiosity_addon.blender.bake import baked_materials, choose_objects
+from radiosity_addon.blender.export import export_scene
+from radiosity_addon.blender.headless import ensure_registered
+from radiosity_addon.blender.lights import render_lamps
 from . import rooms
 
 

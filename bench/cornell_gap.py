@@ -3,7 +3,7 @@ the benchmark): a ceiling panel as users model one, an emissive plane just below
 The sample's light is 5 mm under it; at 1 mm the ceiling around the light is where a baker's
 interpolation shows (a dark ring) and where the light's back lights the ceiling right above it.
 
-    python -m radiosity_addon.bench.cornell_gap --gap 0.001 --output out/cornell/cornell_1mm.blend
+    python -m bench.cornell_gap --gap 0.001 --output out/cornell/cornell_1mm.blend
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def save_cornell_gap(path: Path, gap: float, sample: Path = SAMPLE) -> float:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m radiosity_addon.bench.cornell_gap",
+    parser = argparse.ArgumentParser(prog="python -m bench.cornell_gap",
                                      description=__doc__.split("\n")[0])
     parser.add_argument("--gap", type=float, required=True, help="metres between the light and the ceiling")
     parser.add_argument("--output", type=Path, required=True, metavar="FILE.blend")

@@ -1,7 +1,7 @@
 """Production scenes, as users get them, from ~50k to ~500k triangles: the benchmark's dense family
 (dev only, like the rest of the benchmark).
 
-    python -m radiosity_addon.bench.production --triangles 300000 --output out/production/p300k.blend
+    python -m bench.production --triangles 300000 --output out/production/p300k.blend
         [--objects 30]
 
 A terrace of 10 x 8 m under a sun and a blue sky: a tiled stone floor (an image texture) and two
@@ -326,7 +326,7 @@ def save_production(path, triangles_target: int, objects: int = 10, seed: int = 
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m radiosity_addon.bench.production",
+    parser = argparse.ArgumentParser(prog="python -m bench.production",
                                      description=__doc__.split("\n")[0])
     parser.add_argument("--triangles", type=int, required=True, metavar="N", help="about how many triangles")
     parser.add_argument("--objects", type=int, default=10, help="about how many mesh objects (1: one of them all)")

@@ -16,7 +16,7 @@ from .shapes import box  # noqa: F401  (the sample files' scripts import it from
 def register_addon() -> None:
     """The add-on's settings are saved with the files, so its properties must exist."""
     if not hasattr(bpy.types.Scene, "radiosity"):
-        from ..blender import register
+        from radiosity_addon.blender import register
 
         register()
 

@@ -1,7 +1,7 @@
 """Furnished rooms of the kind Blender users bake, from ~1k to ~100k triangles: the benchmark's
 realistic scenes (dev only, like the rest of the benchmark).
 
-    python -m radiosity_addon.bench.rooms --triangles 4000 --output out/rooms/room_4k.blend
+    python -m bench.rooms --triangles 4000 --output out/rooms/room_4k.blend
 
 The room (room_layout.py has its geometry): 6 × 4 × 2.8 m inside; floor, ceiling and walls are
 closed slabs with thickness; a window opening with a frame in the south wall and a SUN lamp
@@ -151,7 +151,7 @@ def save_room(path, triangles_target: int, seed: int = 0, **options) -> dict:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m radiosity_addon.bench.rooms", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m bench.rooms", description=__doc__.split("\n")[0])
     parser.add_argument("--triangles", type=int, required=True, metavar="N", help="about how many triangles")
     parser.add_argument("--output", required=True, metavar="FILE.blend")
     parser.add_argument("--seed", type=int, default=0)

@@ -11,8 +11,8 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-from ..blender.apply import file_name
-from ..blender.tags import lightmap_image_name
+from radiosity_addon.blender.apply import file_name
+from radiosity_addon.blender.tags import lightmap_image_name
 from .blend_reference import UV_MAP
 from .compare import inside_box, rasterize_texels
 from .rooms import ROOM_PROPERTY

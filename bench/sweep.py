@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core import Scene, SolveError, SolveSettings, solve
+from radiosity_addon.core import Scene, SolveError, SolveSettings, solve
 from . import metrics, reference
 from .scenes import ANALYTIC_SCENES
 from .texels import solution_texels, texel_patches, texel_weights
@@ -34,8 +34,11 @@ def one_at_a_time(base: SolveSettings, **axes) -> tuple[SolveSettings, ...]:
 
 
 def make_plan(quick: bool) -> SweepPlan:
-    hemicube = SolveSettings(method="hemicube", subdiv=6, hemicube_res=64, solver="jacobi-gpu", tolerance=1e-5)
-    progressive = SolveSettings(method="progressive", subdiv=4, elements=4, tolerance=1e-3)
+    # final's preset with the finer hemi-cubes and probe the sweep was first measured with
+    hemicube = SolveSettings(method="hemicube", quality="final", subdiv=6, hemicube_res=64, hemicube_elements=2,
+                             probe_pieces=8, solver="jacobi-gpu", tolerance=1e-5)
+    progressive = SolveSettings(method="progressive", quality="final", subdiv=4, elements=4, probe_pieces=8,
+                                tolerance=1e-3)
     if quick:
         return SweepPlan(
             texel_resolution=32, reference_samples=1024, cycles_samples=(4, 16, 64),

@@ -1,4 +1,4 @@
-"""`python -m radiosity_addon.bench.calibrate`: measure the constants of the auto method's cost
+"""`python -m bench.calibrate`: measure the constants of the auto method's cost
 model (core/method_choice.py) on this machine, on the Cornell box subdivided more and more:
 
 - a hemi-cube of the hemi-cube method (drawn, reduced, read back): seconds per pixel and per
@@ -17,7 +17,7 @@ import argparse
 import os
 import numpy as np
 
-from ..core import SolveSettings, load_scene, solve
+from radiosity_addon.core import SolveSettings, load_scene, solve
 
 
 def fit(rows: list, seconds: list) -> np.ndarray:
@@ -87,7 +87,7 @@ def main(argv=None) -> int:
     shot_pixel, shot_triangle, per_element_shot = shot_costs(scene)
     per_entry_sweep = sweep_cost(scene)
     shots = shots_per_patch(scene)
-    print(f"# measured by python -m radiosity_addon.bench.calibrate (load average {started_load:.1f}"
+    print(f"# measured by python -m bench.calibrate (load average {started_load:.1f}"
           f" -> {os.getloadavg()[0]:.1f})")
     print(f"HEMICUBE_SECONDS = {{'pixel': {per_pixel:.3g}, 'triangle': {per_triangle:.3g}}}")
     print(f"SHOT_SECONDS = {{'pixel': {shot_pixel:.3g}, 'triangle': {shot_triangle:.3g},"

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import Convergence, form_factor_matrix, load_scene, solve_linear, subdivide
+from radiosity_addon.core import Convergence, form_factor_matrix, load_scene, solve_linear, subdivide
 
 SAMPLES = 30
 SUBDIVISIONS = tuple(range(2, 13))  # 17 n² patches: 68 ... 2448

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import tone_map, write_png
+from radiosity_addon.core import tone_map, write_png
 from .compare import covered
 
 DIFFERENCE_RANGE = 0.5  # the relative difference shown at full colour

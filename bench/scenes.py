@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core import Scene, point_to_polygon, scene_from_dict
+from radiosity_addon.core import Scene, point_to_polygon, scene_from_dict
 from .texels import sample_parameters, surface_points
 
 FURNACE_REFLECTANCE = 0.9

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core import Scene
+from radiosity_addon.core import Scene
 
 
 def compared_surfaces(scene: Scene, weights: np.ndarray) -> np.ndarray:
