@@ -3,7 +3,7 @@
 For geometry whose materials cannot be baked by Cycles (instances, occluders without a
 'Lightmap' UV map; baked objects get `material_bake`): `shader_graph.walk` with numbers — a
 texture on a colour input becomes its average colour, a Principled BSDF its diffuse part
-(about (1 − metallic)(1 − transmission)(1 − 0.075 x specular level), within 2 % of Cycles at
+(about (1 − metallic)(1 − transmission)(1 − 0.075 x specular level), close to Cycles' at
 roughness ≥ 0.5), anything else a grey default, each with a warning.
 """
 

@@ -1,7 +1,7 @@
 """One estimate of when a bake ends, shown as a bar that moves with time and as time left.
 
 bpy-free. The solver's own fraction says little about time (progressive refinement's "1 −
-unshot" is at 65 % after its first shots and creeps through the last 5 %), so the bar shows the
+unshot" leaps with its first shots and creeps through the last few per cent), so the bar shows the
 elapsed share of the estimated total instead: total = elapsed + the solver process's estimate of
 the job's time left (every stage of the solve and the lightmaps: core.timing.StagePlan; without
 one, its fraction extrapolated linearly), smoothed over a few seconds. The first second of a solve

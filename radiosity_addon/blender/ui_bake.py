@@ -21,7 +21,7 @@ from .progress import BakeClock
 from .worker import end_spare
 
 TIMER_INTERVAL = 0.1  # seconds between the modal timer's ticks
-REDRAW_INTERVAL = 0.25  # at most four redraws of the panel and status bar a second (llvmpipe: ~30 ms each)
+REDRAW_INTERVAL = 0.25  # at most four redraws of the panel and status bar a second (a redraw is slow on llvmpipe)
 PREVIEW_INTERVAL = 2.0  # seconds between live previews of a progressive bake
 BUSY = "a radiosity bake is running (Esc cancels it)"
 

@@ -313,7 +313,7 @@ class BakeWorker:
     def discard(self, wait: bool = True) -> None:
         """End the child (if it still runs) and remove its files; the result is dropped. `wait`
         False (a bake that succeeded): the child is killed here, and waiting for its exit (the
-        kernel's teardown of its memory: 8-16 ms on the Cornell box) and then removing its folder
+        kernel's teardown of its memory) and then removing its folder
         (Windows removes no file of a running process) happen on a thread, which Python's exit
         waits for."""
         process, directory = self._process, self.directory

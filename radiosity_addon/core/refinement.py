@@ -96,7 +96,7 @@ def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: fl
       them many times, so the fall of the light towards the opening, where it escapes, must be
       resolved on both sides even where no direct light changes (the emitter's back gets none).
       Unresolved, the Cornell box as Blender exports it (its light 5 mm under the ceiling) bakes
-      4-11 % too bright everywhere: the cavity's gain is overestimated and the whole room gets it."""
+      too bright everywhere: the cavity's gain is overestimated and the whole room gets it."""
     light = np.asarray(element_light, dtype=np.float64).sum(axis=-1)  # (P, S, S)
     mean = light.mean(axis=(1, 2))
     area = patches.area

@@ -9,11 +9,11 @@ so it imports numpy, moderngl and this package exactly as Blender would. Nothing
 
 With JOB_DIR `-` it is a spare, started ahead of the bake that will use it: it does its imports
 and opens its OpenGL context, then waits for the job folder on stdin (one JSON string and a
-newline). That takes the start of a process (~0.3-0.4 s on 2 cores) off every bake but the first
-of a Blender session. Before it says it is ready it warms its context with a small solve
-(`warm_up`): a job's first use of each program in a process costs it compiling that program
-and llvmpipe its shader variants, and numpy its first calls. It still solves one job and ends:
-a crash or a cancel costs only itself.
+newline). That takes the start of a process off every bake but the first of a Blender session.
+Before it says it is ready it warms its context with a small solve (`warm_up`): a job's first
+use of each program in a process costs it compiling that program and llvmpipe its shader
+variants, and numpy its first calls. It still solves one job and ends: a crash or a cancel costs
+only itself.
 """
 
 from __future__ import annotations
@@ -66,7 +66,7 @@ def watch_parent(jobs: queue.Queue) -> None:
 
 
 WARM_UP_SCENE = "cornell-box"  # bundled with the package (core/scene/scenes)
-WARM_UP_QUALITY = "draft"  # ~0.3 s on 2 cores with llvmpipe; "final" warmed no better
+WARM_UP_QUALITY = "draft"  # the cheapest preset compiles the same programs; a dearer one warms no better
 
 
 def ready_gpu():
@@ -81,10 +81,8 @@ def ready_gpu():
 def warm_up(gpu) -> bool:
     """Solve and bake the bundled Cornell box on `gpu` and drop what it made but the compiled
     programs: the hemi-cube method's and the lightmaps' programs are then compiled (with llvmpipe,
-    their shader variants too) and numpy's first calls made before a job comes. The Cornell box's
-    `final` job took 0.81 s after it against 0.83-0.89 s without (medians of six fresh processes
-    each: the job's solve and lightmaps). True if it ran; a failure leaves the
-    spare as it was (the job then meets and reports the same problem)."""
+    their shader variants too) and numpy's first calls made before a job comes, not in it. True
+    if it ran; a failure leaves the spare as it was (the job then meets and reports the same problem)."""
     try:
         with core.open_gpu(gpu):
             scene = core.load_scene(WARM_UP_SCENE)

@@ -3,7 +3,7 @@
 A hemi-cube samples what its centre sees at its pixels' resolution: a small, very bright patch —
 the ceiling in the 5 mm cavity over the Cornell box's light, lit by the light's back — seen
 through a slit a few millimetres high covers a pixel or none, so a wall below gets its light
-several times over or not at all (32 pixels: the back wall's top row +30 %, in blotches). The
+several times over or not at all (at 32 pixels the back wall's top row shows bright blotches). The
 linear solve then carries that error everywhere. The columns of F for such patches are
 recomputed the other way round: each bright patch shoots a unit radiosity with its own
 visibility map (`visibility_res` pixels, at most COLUMN_VISIBILITY_RES; the exact
@@ -16,21 +16,14 @@ pixels about 8 pixels at the top face's centre, 30 on average). The pixels the h
 the patch wrongly are not handed to what lies behind it, so a row's sum moves by what was aliased
 (unbiased on average; it was as wrong the other way). Near,
 the hemi-cube is right and the shot is not: the ceiling's patches shooting at the light's back
-5 mm away left the cavity 2 % dark.
+5 mm away left the cavity dark.
 
 Bright: the light a patch reflects straight from the direct light, ρ D, at least BRIGHT_RATIO
 times the area-weighted mean over the reflecting patches; the brightest MAX_BRIGHT_PATCHES of
 them — when together they reflect at least MIN_POWER_SHARE of all the power reflected, else none:
-their aliasing moves that share of the light at most. The Cornell box's cavity holds 58-65 % of
-it; on the 4k room the brightest 96 patches hold 5.8 %, and shooting them changed its error by
-nothing measurable (5.13 %) for 2.1 s. A scene lit evenly has none, and pays nothing.
+their aliasing moves that share of the light at most. A scene lit evenly has none, and pays nothing.
 
-Measured on the Cornell box (tools/measure_in_process.py, 2026-12-06): final's object-balanced
-error without the reference's noise 7.3 → 4.9 % (the back wall's top row no longer +30 %), its
-texel RMS 2.33 → 2.29 %, for 0.5–0.6 s more form factors (1 918 patches, 96 columns; their 96
-visibility maps are most of it: three shots a pass instead of 32 took 0.6 s against 0.5);
-2 x 2 points per patch gave what 4 x 4 did in half the time. On the 4k room: no change in error
-(5.13 %), 2.1 s more: below MIN_POWER_SHARE, the room shoots none.
+What it buys, measured: docs/benchmarks.md, "Why the presets hold these values".
 """
 
 from __future__ import annotations
@@ -43,12 +36,10 @@ from ..shooting import PatchShooters, TexelReceivers, element_areas, surface_vis
 from ..shooting.sky import element_frames
 
 BRIGHT_RATIO = 4.0
-MAX_BRIGHT_PATCHES = 96  # 8 and 48 left the Cornell box at 6.0 %
+MAX_BRIGHT_PATCHES = 96  # enough for the Cornell box's cavity: fewer left its error where it was
 COLUMN_POINTS = 2
-# the columns' shots' visibility at most this (hemi-cubes of 64 px): the receivers are far (FAR_SIZES)
-# and their light is averaged over an element; final's 512 took 0.19-0.28 s of the Cornell box's
-# solve, 256 0.12-0.18 s, 128 0.09-0.14 s, with the same errors to the digit (2.29 %, 4.87 % balanced;
-# measured again on 2026-12-07: 128 gives 4.88 %)
+# the columns' shots' visibility at most this: their receivers are far (FAR_SIZES) and each
+# element's light is an average, so a finer map costs time and changes nothing
 COLUMN_VISIBILITY_RES = 128
 WELL_SAMPLED = 0.01
 FAR_SIZES = 8.0

@@ -16,8 +16,8 @@ GPU_CHECK_EVERY = 16  # sweeps between readbacks of the convergence pair
 STALL_CHECKS = 40  # checks without a 1 % improvement before we call it stalled
 GAUSS_SEIDEL_BLOCK = 64
 # Gauss-Seidel sums F's rows in float32 (half the memory traffic of widening each block to float64,
-# which is what a sweep costs: 0.09 -> 0.04 s a sweep at 7 793 patches) when the tolerance is at
-# least this: float32 sums are off by ~1e-7 of B, a hundredth of such a tolerance; finer ones need float64
+# which is what a sweep costs) when the tolerance is at least this: float32 sums are off by ~1e-7 of B,
+# a hundredth of such a tolerance; finer ones need float64
 SINGLE_SUMS_TOLERANCE = 1e-5
 
 

@@ -6,8 +6,9 @@ element as the mean over DIRECT_POINTS x DIRECT_POINTS points of each patch (the
 each with its own visibility: `shooting.direct_light_at_elements`), and the hemi-cubes carry only
 the light reflected: H = D + F R with R = B − E, so (I − ρF) R = ρ D. A hemi-cube's centre sees an
 emitter as a point sample of its patch: a ceiling patch whose centre lies above a light 5 mm under
-it saw the light's back fill its hemisphere, and sent that into the room (28 patches: the Cornell
-box's walls +1 900 to +3 200 %); the reflected light is smooth, so coarse hemi-cubes carry it well.
+it saw the light's back fill its hemisphere, and sent that into the room (such patches made the
+Cornell box's walls many times too bright); the reflected light is smooth, so coarse hemi-cubes
+carry it well.
 
 Scene analysis (`effects`) trims the work: no hemi-cube for patches that reflect nothing,
 analytic unoccluded form factors instead of hemi-cubes when nothing can occlude, one

@@ -12,9 +12,9 @@ sample across it (a one-texel box), kept inside the face the centre lies on. Whe
 light bends sharply across a texel (a shadow's or a light's edge: `sharp_texels`), the texel's
 light is the mean of N x N points spread over its square inside its face (`footprint_points`;
 N is `LightmapSettings.direct_subsamples`); elsewhere the light is smooth enough that the centre
-is that mean to within SHARP_CONTRAST / 24 (half a per cent). Measured on the Cornell box: the
-ceiling around the lamp (whose back lights it from 5 mm, a third of a texel) was 99 % of the
-whole bake's squared error at texel centres.
+is that mean to within SHARP_CONTRAST / 24 (half a per cent). Centres alone go wrong where the
+light bends within a texel: on the Cornell box, the ceiling around the lamp whose back lights it
+from 5 mm (a third of a texel) held nearly all of the bake's error.
 """
 
 from __future__ import annotations

@@ -150,8 +150,8 @@ def cluster_owners(scene, patches: Patches) -> np.ndarray:
     the names' order (from the index: a Surface per face cost more than the clusters), except
     that a patch facing an emitter across a gap narrower than itself, or an emitter's side facing
     one (a ceiling over a light hung just under it, and that light's back), is alone: a cluster's
-    one polygon, from one eye, cannot keep light within a gap's width of where it was (the 4k
-    room's cavity came out 1.8 x too bright)."""
+    one polygon, from one eye, cannot keep light within a gap's width of where it was (a cavity
+    clustered so comes out too bright)."""
     name_rank = np.argsort(np.argsort(np.array(scene.object_names, dtype=object)))
     owner = name_rank[scene.object_index][patches.surface]
     alone = np.flatnonzero(emitter_gaps(patches) < np.sqrt(patches.area))

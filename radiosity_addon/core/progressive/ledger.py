@@ -103,7 +103,7 @@ def remainder_light(power: np.ndarray, recent_light: np.ndarray, element_areas: 
     return recent * scale
 
 
-SLOWEST = 0.7  # the most the rate is let fall per doubling of the time (measured falls: 0.5-1)
+SLOWEST = 0.7  # the most the rate is let fall per doubling of the time (a slow stretch must not blow up the estimate)
 
 
 def log_rate(history, start: float, end: float) -> float | None:
@@ -120,10 +120,7 @@ def time_left(history, tolerance: float):
     decrease of log(unshot) falls as the solve goes (the first shots carry most of the energy):
     measured over the last half of the time, and over the quarter before, it gives how much it
     falls per doubling of the time, and the estimate lets it go on falling so (by at most SLOWEST
-    per doubling). From a quarter of the way on, a window of the last 50 batches said 47-100 % of
-    the total on the Cornell sample at 10⁻² and the last half's rate alone 68-101 %; this says
-    99-111 % there and 96-192 % on the Cornell box at 10⁻³: it errs long rather than short, as a
-    progress bar that never goes back must."""
+    per doubling): it errs long rather than short, as a progress bar that never goes back must."""
     if len(history) < 4:
         return None
     now, unshot = history[-1]

@@ -63,8 +63,8 @@ def _plane_heights(scene: Scene, planes: slice, points: np.ndarray) -> np.ndarra
 
 def _chunks(count: int, width: int):
     """Slices of up to ROWS_PER_CHUNK rows, fewer where each row tests `width` points, so that a
-    chunk's arrays have at most CHUNK_TESTS entries whatever the scene's size (at 64k triangles
-    256 rows against every corner took 0.7-1 GB)."""
+    chunk's arrays have at most CHUNK_TESTS entries whatever the scene's size (a fixed number of
+    rows, each against every corner, would take memory in proportion to the scene)."""
     rows = int(min(ROWS_PER_CHUNK, max(1, CHUNK_TESTS // max(width, 1))))
     for start in range(0, count, rows):
         yield slice(start, min(start + rows, count))

@@ -14,7 +14,7 @@ from ..timing import pulse
 
 PAIR_CHUNK = 1 << 20  # candidate pairs expanded at once
 OFFSET_QUERIES = 4096  # query cells searched in one step (the 27 around each query, by offset)
-CLASS_RATIO = 2.5  # sizes within a class differ by at most this factor (4: the 4k room's 7 793 patches' facing partners 0.73-0.77 s, 2.5: 0.57 s, 2: 0.63 s)
+CLASS_RATIO = 2.5  # sizes in a class differ by at most this (smaller: more class pairs; larger: more candidates)
 OFFSETS = np.stack(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1], indexing="ij"), axis=-1).reshape(-1, 3)
 
 
@@ -32,9 +32,8 @@ def near_pairs(centre: np.ndarray, radius: np.ndarray, queries: np.ndarray, reac
     """Yield chunks (query positions into `queries`, other indices) of every pair whose centres are
     closer than reach[query] + radius[other]; the query itself is included. `others` (indices into
     `centre`; None: all) are the things a query may meet. The grids' many small
-    chunks (per pair of size classes and step of offsets: some 30 a search on the Cornell box) are
-    joined into chunks of about PAIR_CHUNK pairs, so a caller's numpy runs once a chunk, not once
-    a grid step (the refinement's facing partners: 73 -> 64 ms a Cornell final solve)."""
+    chunks (per pair of size classes and step of offsets) are joined into chunks of about
+    PAIR_CHUNK pairs, so a caller's numpy runs once a chunk, not once a grid step."""
     centre = np.asarray(centre, dtype=np.float64)
     queries = np.asarray(queries)
     if len(queries) == 0 or len(centre) == 0:

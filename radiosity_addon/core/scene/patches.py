@@ -84,7 +84,7 @@ class Patches:
         """(P,) plane id: the surface for fronts, surfaces + surface for backs (the other side)."""
         return np.where(self.back_of >= 0, self.surface + len(self.split), self.surface)
 
-    # the corners' measures, computed once (a solve asks for them some 200 times; a split makes new
+    # the corners' measures, computed once (a solve asks for them many times; a split makes new
     # Patches, and nothing writes into a Patches' corners). Read-only, so a caller cannot spoil them.
     @cached_property
     def area_vector(self) -> np.ndarray:

@@ -4,7 +4,7 @@ SKY_DIRECTIONS suns spread evenly over the sphere (a Fibonacci lattice), each of
 L 4π / SKY_DIRECTIONS and with its own orthographic visibility map of the scene's surfaces: a
 point's light is then sum_k L (4π / N) cos θ_k V_k / π, the sky integral's even sampling. Its cost
 is N maps of the surfaces and N passes over the points: linear in both, where a hemi-cube at every
-point drew the whole scene once per point (a 300k-triangle terrace: 33 000 probe points, 100 s)."""
+point drew the whole scene once per point."""
 
 from __future__ import annotations
 

@@ -1,9 +1,8 @@
 """Which triangles each hemi-cube face can show, decided per cluster of triangles before the draw.
 
-On llvmpipe a batch of hemi-cubes costs in proportion to the triangles it draws (the 4k room's batches
-took as long with 8-pixel faces as with 32-pixel ones): every face of every hemi-cube runs the vertex
-shader and clips every triangle of the scene, though a face sees a fifth of the hemisphere at most
-and nothing below the horizon. So the
+On llvmpipe a batch of hemi-cubes costs in proportion to the triangles it draws, whatever the size of
+its faces: every face of every hemi-cube runs the vertex shader and clips every triangle of the
+scene, though a face sees a fifth of the hemisphere at most and nothing below the horizon. So the
 item geometry's triangles are grouped into small, compact clusters (sorted by size, then along a
 Morton curve) with a bounding box each, and a face draws only the clusters whose box reaches
 into its frustum: one indirect draw command per (face, cluster) kept, all in one multi-draw call.

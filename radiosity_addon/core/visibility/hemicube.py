@@ -114,8 +114,8 @@ class HemicubeAtlas:
         # one work group of the reduction per slot in z: small hemi-cubes (8 px: 87 040 tiles) stay within its limit
         self.slots = min(self.tiles_per_row * tile_rows, MAX_WORK_GROUPS)
         self.atlas_size = (self.tiles_per_row * resolution, tile_rows * 3 * resolution)
-        # `used_slots`: only the tile rows those fill are allocated (llvmpipe zero-fills a target:
-        # 0.05 s for the Cornell box's 4096 x 3264 atlas and depth, 1 930 of 4 352 slots used);
+        # `used_slots`: only the tile rows those fill are allocated (llvmpipe zero-fills a target,
+        # so rows no hemi-cube uses cost time);
         # the viewport stays the whole atlas, so every hemi-cube falls on the same pixels
         if used_slots is not None:
             self.slots = max(1, min(self.slots, used_slots))
@@ -173,7 +173,6 @@ class HemicubeAtlas:
             self.draws_skipped += 1
             return
         self.drawn_frames = None  # until drawn
-        count = len(hemicube_frames[0])
         instances = face_instances(hemicube_frames, self.resolution, self.tiles_per_row, self.atlas_size)
         self.instance_buffer.write(instances.tobytes())
         for name, value in self.uniforms.items():
@@ -226,8 +225,7 @@ class HemicubeRenderer(HemicubeAtlas):
         1 minus a row's sum is what sees the sky. float32 rounds each entry once, as float64
         then float32 would (1 / FORM_FACTOR_ONE is a power of two), at half the conversion's cost.
         `out` (count, k ≤ P + 1) of `dtype`: the rows' first k columns are written into it and it
-        is returned — no temporary of the rows' size (1 930 hemi-cubes: 15 MB, whose first touch
-        cost 12-28 ms on this VM)."""
+        is returned — no temporary of the rows' size (whose pages' first touch costs time)."""
         ctx = self.ctx
         count = len(hemicube_frames[0])
         self.draw(hemicube_frames)

@@ -32,9 +32,9 @@ from .opacity import OpacityAtlas
 from .opacity import defines as opacity_defines
 
 TESSELLATION = 32  # most segments per patch side
-# Geometry shader instances per patch (each draws every k-th row of the grid): fewer is faster
-# on llvmpipe (4: 5 ms, 16: 12 ms per 1088-patch map) but needs more output per instance than
-# the GL minimum (1024 components); the first count that links is used.
+# Geometry shader instances per patch (each draws every k-th row of the grid): fewer is faster on
+# llvmpipe but needs more output per instance than the GL minimum (1024 components); the first count
+# that links is used.
 GEOMETRY_INVOCATIONS = (4, 8, 16, 32)
 SEGMENT_ANGLE = 0.15  # radians seen from the eye per segment, at most (when TESSELLATION allows)
 

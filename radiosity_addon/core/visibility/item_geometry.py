@@ -1,7 +1,7 @@
 """What item buffers draw: the scene's geometry, each primitive telling which patch it shows.
 
 A hemi-cube batch draws the whole scene once per face of every hemi-cube, so its cost grows with
-the triangles drawn (on llvmpipe, measured: time in proportion to them). A flat convex quad surface
+the triangles drawn (on llvmpipe, time in proportion to them). A flat convex quad surface
 split into many patches (a wall, a floor, refined near an emitter) is therefore drawn once, as its
 own two triangles, and the fragment shader finds the patch whose rectangle of the surface's
 bilinear parameters (s, t) holds the pixel, in a table over the surface's distinct cut parameters
@@ -39,9 +39,7 @@ TABLE_CELLS_PER_PATCH = 16  # a surface whose cut table would hold more cells th
 # patch by patch (cuts that do not line up across it make the table grow as their product)
 
 # Looked up only where the triangles saved per face reach half the face's pixels (the lookup runs for
-# every fragment, overdrawn ones too). Measured on llvmpipe (docs/architecture.md): the Cornell box's
-# `final` form factors (64 px, 0.61 saved per pixel) and a 4k room's hemi-cube `final` gain; the
-# room's 128-px `good` shooter maps (0.28) come out even, 256-px probes (< 0.05) lose.
+# every fragment, overdrawn ones too: below that it costs more than the triangles it saves).
 LOOKUP_PIXELS_PER_TRIANGLE = 0.5
 
 RECORD = 5  # uvec4s per looked-up unit (`ItemGeometry.surfaces`)
@@ -49,8 +47,7 @@ GRID_ROW_SHIFT = 15  # a grid triangle's unit key: row << 15 | column (columns <
 TRIANGLE_MAP = 2  # a record's map: a grid triangle (s = w1 / (1 - w2), t = w2 from barycentric weights)
 OWN_TRIANGLES = 3  # a vertex's map when it belongs to a patch drawn by its own triangles (no lookup)
 # Every vertex of a unit carries the unit's record (`unit_record`), passed on flat: a fragment then reads
-# only the cuts, bins and table cell it needs. Reading the record per fragment from a storage buffer took
-# half of draft's 64-pixel form factors on the Cornell box (1.10 -> 0.52 s, llvmpipe; the same rows).
+# only the cuts, bins and table cell it needs, not the record from a storage buffer (slow per fragment).
 VERTEX_DTYPE = [("p", "f4", 3), ("n", "f4", 3), ("id", "u4"), ("twin", "i4"), ("st", "f4", 2),
                 ("record", "u4", (4, 4)), ("opacity_uv", "f4", 2), ("opacity_rect", "i4", 4)]
 
