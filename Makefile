@@ -9,7 +9,7 @@ RIG := tools/blender_rig.sh
 RIG_5_2 ?= /var/cache/blender-rig
 RIG_4_3 ?= /var/cache/blender-rig-trixie
 
-.PHONY: setup check-system demo test test-timing test-blender rigs bench bench-quick bench-production bench-lightmaps extension samples clean
+.PHONY: setup check-system demo test test-zink test-timing test-blender rigs bench bench-quick bench-production bench-lightmaps extension samples clean
 
 setup: check-system $(STAMP)
 
@@ -32,7 +32,15 @@ demo: setup sample_blends/.made
 	  --report $(OUT)/cornell-box-report.json
 
 test: setup
+	$(VENV)/bin/ruff check .
 	$(PY) -m pytest
+
+# the tests marked gl (every shader and pass) again on a second OpenGL implementation, Mesa's zink
+# over the Vulkan software device (needs: apt-get install mesa-vulkan-drivers)
+ZINK := LIBGL_ALWAYS_SOFTWARE=1 MESA_LOADER_DRIVER_OVERRIDE=zink EGL_PLATFORM=surfaceless \
+  XDG_RUNTIME_DIR=$${XDG_RUNTIME_DIR:-/tmp} RADIOSITY_EXPECT_RENDERER=zink
+test-zink: setup
+	$(ZINK) $(PY) -m pytest -m gl
 
 # the wall-clock ratios `make test` leaves out (tests marked timing): run them on a quiet machine
 test-timing: setup
@@ -61,21 +69,21 @@ samples: setup
 	$(PY) tools/make_sample_blends.py
 	touch sample_blends/.made
 
-sample_blends/.made: tools/make_sample_blends.py radiosity_addon/bench/blend_scenes.py \
-		radiosity_addon/bench/shapes.py | setup
+sample_blends/.made: tools/make_sample_blends.py bench/blend_scenes.py \
+		bench/shapes.py | setup
 	$(PY) tools/make_sample_blends.py
 	touch $@
 
 # accuracy vs time against Cycles and exact answers, and the dissertation's Table 5.1
 # (the Cycles reference is cached in $(OUT)/bench*/cache, so reruns are cheap)
 bench: setup
-	$(PY) -m radiosity_addon bench --output-dir $(OUT)/bench
+	$(PY) -m bench --output-dir $(OUT)/bench
 
 bench-quick: setup
-	$(PY) -m radiosity_addon bench --quick --output-dir $(OUT)/bench-quick
+	$(PY) -m bench --quick --output-dir $(OUT)/bench-quick
 
 # the production terrace (dense meshes, 20 materials in one object, a triangle soup, alpha-cut
-# leaves, sun and sky; radiosity_addon/bench/production.py) on a quiet machine, ~1 h: how each stage
+# leaves, sun and sky; bench/production.py) on a quiet machine, ~1 h: how each stage
 # grows from 50k to 500k triangles (10 objects; then 300k as one object and as 30) and the presets
 # against Cycles at 50k, with pictures; the tables, plots and pictures go to docs/bench/production/
 PRODUCTION_DOCS := docs/bench/production
@@ -87,7 +95,7 @@ bench-production: setup
 	  --cycles 16 --output-dir $(OUT)/scaling-production-one
 	$(PY) tools/measure_scaling.py --family production --objects 30 --triangles 300000 --quality draft \
 	  --cycles 16 --output-dir $(OUT)/scaling-production-30
-	$(PY) -m radiosity_addon.bench.production --triangles 50000 --output $(OUT)/production/p50k.blend
+	$(PY) -m bench.production --triangles 50000 --output $(OUT)/production/p50k.blend
 	$(PY) tools/measure_presets.py $(OUT)/production/p50k.blend --output-dir $(OUT)/presets-production \
 	  --runs '{"quality": "draft"}' '{"quality": "good"}' '{"quality": "final"}' --reference 256 --cycles 16 64 \
 	  --pictures $(OUT)/presets-production/pictures
@@ -106,10 +114,10 @@ bench-production: setup
 # object's texel RMS and pictures (ours | Cycles | difference) into docs/bench/lightmaps/, ~25 min
 LIGHTMAP_DOCS := docs/bench/lightmaps
 bench-lightmaps: setup sample_blends/.made
-	$(PY) -m radiosity_addon.bench.cornell_gap --gap 0.001 --output $(OUT)/cornell/cornell_1mm.blend
+	$(PY) -m bench.cornell_gap --gap 0.001 --output $(OUT)/cornell/cornell_1mm.blend
 	$(PY) tools/measure_presets.py $(OUT)/cornell/cornell_1mm.blend --output-dir $(OUT)/lightmaps/cornell-1mm \
 	  --runs '{"quality": "final"}' --reference 512 --cycles 64 --pictures $(OUT)/lightmaps/cornell-1mm/pictures
-	$(PY) -m radiosity_addon.bench.rooms --triangles 4000 --output $(OUT)/rooms/room_4k.blend
+	$(PY) -m bench.rooms --triangles 4000 --output $(OUT)/rooms/room_4k.blend
 	$(PY) tools/measure_presets.py $(OUT)/rooms/room_4k.blend --output-dir $(OUT)/lightmaps/room \
 	  --runs '{"quality": "good"}' --reference 128 --cycles 16 --pictures $(OUT)/lightmaps/room/pictures
 	mkdir -p $(LIGHTMAP_DOCS)
@@ -122,3 +130,18 @@ bench-lightmaps: setup sample_blends/.made
 
 clean:
 	rm -rf $(OUT) dist build .pytest_cache
+
+# the README's tables of measured figures, rewritten from the JSON in docs/bench/ that the bench
+# commands named next to each table write (standard library only; idempotent).
+# Check without writing: python3 tools/readme_figures.py --check (exit 1: out of date)
+.PHONY: readme-figures
+readme-figures:
+	$(PYTHON_BOOTSTRAP) tools/readme_figures.py
+
+# docs/architecture.md's generated tables (the quality presets and the settings' defaults from
+# radiosity_addon/core/settings.py, the core's layering from tests/test_layering.py), rewritten
+# from the code (idempotent). Check without writing, links included:
+# .venv/bin/python tools/architecture_tables.py --check (exit 1: out of date or a broken link)
+.PHONY: architecture-tables
+architecture-tables: setup
+	$(PY) tools/architecture_tables.py

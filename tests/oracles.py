@@ -18,7 +18,7 @@ import numpy as np
 from radiosity_addon.core import Patches
 from radiosity_addon.core.shooting import (ElementTextures, PatchBuffers, PatchShooters, ShootingPass, ShotVisibility,
                                            element_centers)
-from radiosity_addon.core.visibility import VARIANTS, VisibilityMap
+from radiosity_addon.core.visibility import VARIANTS
 
 
 def hemispherical_projection(points: np.ndarray, eye: np.ndarray, axes) -> np.ndarray:
