@@ -6,6 +6,7 @@ Errors a user can cause end in one line on stderr and exit status 2, never a tra
 from __future__ import annotations
 
 import argparse
+import os
 import json
 import sys
 import time
@@ -40,20 +41,33 @@ SOLVER_OPTIONS = [
      " (not given: the quality's, 1e-5 and 1e-2 for good)"),
     ("--max-iterations", "max_iterations", {"type": int}, "iteration cap of the linear solvers"),
     ("--max-shots", "max_shots", {"type": int}, "shot budget of the progressive method"),
+    ("--visibility-res", "visibility_res", {"type": int, "metavar": "R"},
+     "pixels across the progressive visibility map"),
+    ("--shooter-clusters", "shooter_clusters", {"type": int, "metavar": "C"},
+     "progressive: with more patches than C, weak light shoots from about C clusters of patches (0: never)"),
+]
+
+
+# the variants the benchmark compared and the presets do not use (docs/benchmarks.md): offered
+# only with RADIOSITY_DEVELOPER=1 in the environment, never to users
+RESEARCH_OPTIONS = [
     ("--visibility", "visibility", {"choices": VISIBILITY_VARIANTS},
      "progressive visibility variant: plain projection, tessellated, tessellated with neighbour search, or"
      " search guarded against peeking past occluders"),
-    ("--visibility-res", "visibility_res", {"type": int, "metavar": "R"},
-     "pixels across the progressive visibility map"),
     ("--shoot-from", "shoot_from", {"choices": SHOOTING_POINTS},
      "progressive: render each shooter's visibility map from the centroid of its unshot power or its centre"),
     ("--complete-remainder", "complete_remainder", {"action": argparse.BooleanOptionalAction},
      "progressive: add the light the power still unshot at the stop would deliver"),
     ("--kernel", "kernel", {"choices": KERNELS},
      "progressive form-factor kernel: exact point-to-polygon or the disk approximation"),
-    ("--shooter-clusters", "shooter_clusters", {"type": int, "metavar": "C"},
-     "progressive: with more patches than C, weak light shoots from about C clusters of patches (0: never)"),
 ]
+DEVELOPER_SWITCH = "RADIOSITY_DEVELOPER"
+
+
+def solver_options() -> list:
+    """The solver options offered: the research variants too where RADIOSITY_DEVELOPER asks."""
+    developer = os.environ.get(DEVELOPER_SWITCH, "") not in ("", "0")
+    return SOLVER_OPTIONS + (RESEARCH_OPTIONS if developer else [])
 
 
 def add_solver_options(parser: argparse.ArgumentParser, defaults_from_file: bool = False) -> None:
@@ -66,7 +80,7 @@ def add_solver_options(parser: argparse.ArgumentParser, defaults_from_file: bool
                        help="what every knob below defaults to: draft (fast), good, final (the README's"
                             " 'What accuracy costs' gives each one's measured error and time)"
                             + (" (default: the file's setting)" if defaults_from_file else f" (default {DEFAULT_QUALITY})"))
-    for flag, field, keywords, text in SOLVER_OPTIONS:
+    for flag, field, keywords, text in solver_options():
         default = getattr(defaults, field)
         keywords = {**keywords, "default": argparse.SUPPRESS}
         if defaults_from_file:
@@ -82,7 +96,7 @@ def add_solver_options(parser: argparse.ArgumentParser, defaults_from_file: bool
 
 def given_solver_options(args) -> dict:
     """SolveSettings fields given on the command line, and the quality."""
-    fields = ["quality"] + [field for _, field, _, _ in SOLVER_OPTIONS] + ["skip_unneeded"]
+    fields = ["quality"] + [field for _, field, _, _ in solver_options()] + ["skip_unneeded"]
     given = {field: getattr(args, field) for field in fields if hasattr(args, field)}
     if given.get("subdiv") is None and "patch_size" in given:
         given["subdiv"] = None  # --patch-size chooses the size mode

@@ -308,10 +308,19 @@ def test_cancel_and_shot_budget(gpu):
     assert solution.report.details.unshot_fraction > 1e-6
 
 
-def test_cli_progressive_writes_elements_and_report(tmp_path):
+def test_cli_progressive_writes_elements_and_report(tmp_path, monkeypatch, capsys):
+    """The research variants (visibility, kernel) only with RADIOSITY_DEVELOPER=1: a user's command
+    line refuses them, and its help does not offer them."""
     import json
 
     from radiosity_addon.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["solve", "cornell-box", "--kernel", "disk"])
+    with pytest.raises(SystemExit):
+        main(["solve", "--help"])
+    assert "--kernel" not in capsys.readouterr().out
+    monkeypatch.setenv("RADIOSITY_DEVELOPER", "1")
 
     out, report = tmp_path / "out.npz", tmp_path / "report.json"
     status = main(["solve", "cornell-box", "--method", "progressive", "--subdiv", "2", "--elements", "2",
