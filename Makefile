@@ -62,7 +62,7 @@ extension: setup
 	$(PY) tools/build_extension.py --output-dir dist
 
 # sample_blends/*.blend (the bundled Cornell box, a hand-made room and the five samples of
-# tests/test_blender_samples.py, tools/make_sample_blends.py says what each holds), in the format of the bpy
+# tests/blender/test_blender_samples.py, tools/make_sample_blends.py says what each holds), in the format of the bpy
 # module's Blender (5.0; not committed: Blender 4.x cannot open 5.x files, so each Blender makes its
 # own: blender -b --factory-startup --python tools/make_sample_blends.py). The tests make them too.
 samples: setup

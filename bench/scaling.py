@@ -1,6 +1,6 @@
 """A furnished room (rooms.py) baked stage by stage as the add-on bakes it, each stage's seconds
 and peak memory recorded: what tools/measure_scaling.py plots against the room's size and what
-tests/test_scaling.py compares between two sizes.
+tests/bench/test_scaling.py compares between two sizes.
 
 Stages: export (the evaluated meshes, lamps and world), material maps (Cycles' albedo and
 emission bakes), the core solve's own stages (analyse, subdivide, refine, direct light, shots or

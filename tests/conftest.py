@@ -12,7 +12,11 @@ from radiosity_addon.core.gpu import debug, resources, shaders  # noqa: E402
 
 EXPECTED_RENDERER = "RADIOSITY_EXPECT_RENDERER"  # make test-zink: the run fails at once on another OpenGL
 
-REAL_BLENDER = Path(__file__).resolve().parent / "real_blender"
+TESTS = Path(__file__).resolve().parent
+REAL_BLENDER = TESTS / "real_blender"
+# the tiers (pytest -m NAME): gl is marked in its modules; bpy and blender by folder; cycles here
+CYCLES_MODULES = {"test_blender_cycles", "test_blender_samples", "test_blender_lamps", "test_blender_opacity",
+                  "test_bench_blend_reference"}  # each bakes Cycles' own reference
 
 
 def pytest_ignore_collect(collection_path, config):
@@ -22,6 +26,17 @@ def pytest_ignore_collect(collection_path, config):
         asked = [Path(arg.split("::")[0]).resolve() for arg in config.args]
         return not any(path == REAL_BLENDER or REAL_BLENDER in path.parents for path in asked)
     return None
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        folder = Path(item.fspath).relative_to(TESTS).parts[0]
+        if folder == "real_blender":
+            item.add_marker(pytest.mark.blender)
+        elif folder == "blender":
+            item.add_marker(pytest.mark.bpy)
+        if Path(item.fspath).stem in CYCLES_MODULES:
+            item.add_marker(pytest.mark.cycles)
 
 
 @pytest.fixture(scope="session")

@@ -8,7 +8,8 @@ README's "Quality presets" tables are measured with.
 FILE is baked as its author made it. Meshes without a 'Lightmap' UV map get one first, made by
 the add-on's own Lightmap Pack, saved as DIR/<name>.blend: every bake and Cycles' reference use
 that copy, so both fill the same texels. Each run is the add-on's headless bake with the file's
-settings and the run's replaced (content: combined, B), timed as a whole; the reference is Cycles'
+settings and the run's replaced (content: combined, B), at the texel density the first run's bake
+chose (a file's automatic density differs by preset: one reference compares them all), timed as a whole; the reference is Cycles'
 Combined bake at `--reference` samples per seed, two seeds (bench/blend_reference.py, cached in
 DIR/cache); `--cycles` adds Cycles' own rows at fewer samples, baked and timed in this run, with a seed
 of their own (`blend_reference.ROW_SEED`: not correlated with the reference). With `--rounds N`
@@ -252,6 +253,7 @@ def main() -> int:
     # every round bakes each run, then each Cycles row: a slower or faster minute of the machine
     # falls on both alike, and the median of the rounds is the time reported (each round's in the json)
     lightmaps, cycles_images, times = {}, {}, {}
+    pinned: dict = {}  # the texel density the first run chose (the file's may be automatic, per preset)
     for round_number in range(args.rounds):
         for k, text in enumerate(args.runs):
             run = json.loads(text)
@@ -259,10 +261,13 @@ def main() -> int:
             load = os.getloadavg()[0]
             spare = worker.wait_for_spare(60)  # as a user's next bake finds it (worker.py)
             started = time.perf_counter()
-            _, report = bake_file(HeadlessBake(str(path), solve_options=solve,
-                                               lightmap_options={**run.get("lightmaps", {}), "content": "combined"},
+            lightmap_options = {**pinned, **run.get("lightmaps", {}), "content": "combined"}
+            _, report = bake_file(HeadlessBake(str(path), solve_options=solve, lightmap_options=lightmap_options,
                                                output_dir=str(out / f"run{k}")))
             times.setdefault(("run", k), []).append(time.perf_counter() - started)
+            if not pinned:  # every run's texels those of the first: one reference compares them all
+                pinned = {"texel_density": report["texel_density"]}
+                record["texel_density"] = report["texel_density"]
             if not spare:  # the session's first bake: its solver process started with it
                 record["first_bake"] = {"label": label_of(run), "seconds": times[("run", k)][-1]}
             if round_number == 0:

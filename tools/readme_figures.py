@@ -144,7 +144,10 @@ def reference_line(record: dict, scene: str) -> str:
     rounds = max(len(run.get("rounds") or [1]) for run in record["runs"])
     cpus = (record.get("machine") or {}).get("cpus")
     where = f" on {cpus} CPU cores (Mesa llvmpipe, no GPU)" if cpus else ""
-    return (f"{scene}: every row baked {rounds} × in turn{where}, the median time given; errors against Cycles'"
+    density = record.get("texel_density")
+    texels = f" at {density:.0f} texels per metre (what the first run chose)" if density else ""
+    return (f"{scene}: every row baked {rounds} × in turn{where}{texels}, the median time given; errors against"
+            f" Cycles'"
             f" Combined bake at {count(reference['samples_per_seed'])} samples × 2 seeds (its own noise"
             f" {percent(reference['noise'])} texel RMS).")
 

@@ -128,6 +128,11 @@ def wait_for_spare(timeout: float) -> bool:
     return not _spare.waiting.is_alive() and _spare.process.poll() is None
 
 
+def spare_process() -> subprocess.Popen | None:
+    """The spare solver process waiting for the next bake, or None."""
+    return _spare.process if _spare is not None else None
+
+
 def take_spare() -> Spare | None:
     """The spare, if it runs and was started with the command a bake would use now; else None
     (and a spare that does not fit is ended)."""
@@ -190,6 +195,16 @@ class BakeWorker:
         self._last_heard = 0.0
         self._preview: str | None = None
         self._over = False
+
+    @property
+    def process(self) -> subprocess.Popen | None:
+        """The solver process of this bake (None before `start`)."""
+        return self._process
+
+    @property
+    def preview_waiting(self) -> bool:
+        """Whether a snapshot of a progressive solve came and waits to be taken."""
+        return self._preview is not None
 
     def start(self) -> "BakeWorker":
         self.directory = Path(tempfile.mkdtemp(prefix="radiosity-bake-"))

@@ -168,7 +168,7 @@ class Solve:
             report = solution.report
             density = core.chosen_texel_density(scene, lightmap_settings, objects)
             automatic = " · auto density" if lightmap_settings.texel_density == 0 else ""  # pieces the panel wraps at
-            self.pipe.send("result", file=protocol.RESULT_FILE, report=report.to_dict(),
+            self.pipe.send("result", file=protocol.RESULT_FILE, report=report.to_dict() | {"texel_density": density},
                            summary=f"{report.summary_line()} · {density:.0f} texels/m{automatic}")
 
 

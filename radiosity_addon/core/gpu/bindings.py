@@ -31,7 +31,7 @@ SHOT_ENERGY_ONE = 1 << 30  # the shooting pass sums hit fractions in fixed point
 FORM_FACTOR_ONE = 1 << 31  # hemi-cube delta form factors are summed as integers: 2^31 = 1
 
 STORAGE = {name: slot for group in STORAGE_GROUPS.values() for name, slot in group.items()}
-# a name shared by two groups (a buffer both passes read) has one slot: tests/test_gpu.py checks it
+# a name shared by two groups (a buffer both passes read) has one slot: tests/core/test_gpu.py checks it
 
 
 def storage(name: str) -> int:

@@ -164,6 +164,11 @@ class GPU:
         return len(self._kept)
 
     @property
+    def spares(self) -> list:
+        """The scratch targets kept for the next scope."""
+        return [obj for spares in self._spares.values() for obj in spares]
+
+    @property
     def spare_bytes(self) -> int:
         """Memory of the scratch targets kept for the next scope."""
         return sum(scratch_bytes(key) * len(spares) for key, spares in self._spares.items())

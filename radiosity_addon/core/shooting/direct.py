@@ -156,7 +156,7 @@ def sky_light(res: Resources, scene: Scene, patches: Patches, points: np.ndarray
     fractions from a hemi-cube of the surfaces at each point where the points are fewer than the
     sky's directions, else from the directions' maps (`sky.sky_shooters`). Each costs the surfaces
     drawn once per hemi-cube or once per direction (about alike a time), and both are within 2 %
-    of the exact fraction (tests/test_lights.py)."""
+    of the exact fraction (tests/core/test_lights.py)."""
     if len(points) <= SKY_DIRECTIONS:
         frames = tangent_frames(points, patches.normal[owners], patches.corners[owners, 1] - patches.corners[owners, 0])
         fractions = sky_fractions(res, surface_patches(scene, patches), frames, SKY_HEMICUBE_RESOLUTION, scene.diameter)

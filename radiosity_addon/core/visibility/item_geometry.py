@@ -90,7 +90,7 @@ def item_geometry(patches: Patches, face_pixels: int | None = None) -> ItemGeome
     patch. With `face_pixels` (the pixels of one face of the maps drawn), units are looked up only
     where that saves time (LOOKUP_PIXELS_PER_TRIANGLE); with 0 never."""
     count = patches.front_count
-    lookup = _lookup_units(patches) if face_pixels != 0 else None
+    lookup = lookup_units(patches) if face_pixels != 0 else None
     if lookup is not None and face_pixels is not None:
         replaced = np.isin(lookup["unit_of"], lookup["units"])
         unit_triangles = int(np.where(lookup["skewed"] == TRIANGLE_MAP, 1, 2).sum())
@@ -106,7 +106,7 @@ def item_geometry(patches: Patches, face_pixels: int | None = None) -> ItemGeome
                             np.zeros(1, np.uint32), twins, opacity_index)
     quads, quad_indices = _unit_geometry(lookup["corners"], lookup["corner_st"], lookup["skewed"] == TRIANGLE_MAP,
                                          unit_record(lookup["records"]), len(vertices))
-    if opacity_index is not None:  # looked-up units are opaque (`_lookup_units`)
+    if opacity_index is not None:  # looked-up units are opaque (`lookup_units`)
         opacity_index = np.concatenate([opacity_index, np.full(len(quads), -1, dtype=np.int64)])
     return ItemGeometry(np.concatenate([vertices, quads]), np.concatenate([indices, quad_indices]),
                         lookup["records"], lookup["cuts"], lookup["bins"], lookup["table"], twins, opacity_index)
@@ -202,7 +202,7 @@ def _units(patches: Patches):
     return unit_of.ravel(), unit_corners, is_grid_triangle
 
 
-def _lookup_units(patches: Patches) -> dict | None:
+def lookup_units(patches: Patches) -> dict | None:
     """The units drawn once with a patch table (`_units`), and their records, cuts and tables (None: none can be)."""
     count = patches.front_count
     if patches.surface_corners is None or count == 0:

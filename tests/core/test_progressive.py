@@ -274,6 +274,7 @@ def test_visibility_search_misclassifies_fewer_elements_than_plain(gpu):
     assert guarded["false_visible"] <= search["false_visible"] <= 5
 
 
+@pytest.mark.slow
 def test_progressive_agrees_with_hemicube_per_surface_on_cornell_box(gpu):
     """Per-surface mean radiosity within 3 % on every surface, both methods on the same 8x8
     patches, each receiving on 2 x 2 elements a patch (measured worst surface 1.1 %; with one

@@ -204,6 +204,7 @@ def test_the_cost_model_counts_clusters_not_patches_as_shooters():
     assert alone == pytest.approx(clustered * len(patches) / shooters, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_patches_facing_an_emitter_across_a_narrow_gap_shoot_alone(gpu):
     """A light 5 mm under a ceiling: the ceiling's patches over it and the light's back never
     cluster (each its own owner), the others cluster by object; a clustered solve then gives the

@@ -74,7 +74,7 @@ def emulated_lookup(geometry: items.ItemGeometry, look: int, st: np.ndarray) -> 
 def test_every_patch_centre_is_found_in_its_units_table():
     scene, patches = cut_room()
     geometry = items.item_geometry(patches)
-    lookup = items._lookup_units(patches)
+    lookup = items.lookup_units(patches)
     looked_up, unit_of = lookup["units"], lookup["unit_of"]
     fronts = np.arange(patches.front_count)
     unit_surface = np.zeros(unit_of.max() + 1, dtype=np.int64)

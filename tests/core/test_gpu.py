@@ -157,10 +157,10 @@ def test_scratch_targets_pass_from_scope_to_scope_and_leave_results_unchanged(wa
     scene = lit_room()
     settings = replace(HEMICUBE, refinements=2)
     first = solve(scene, settings, gpu=watched)
-    kept = {id(obj) for spares in watched._spares.values() for obj in spares}
+    kept = {id(obj) for obj in watched.spares}
     assert kept and 0 < watched.spare_bytes <= MAX_SPARE_BYTES
     second = solve(scene, settings, gpu=watched)
-    assert {id(obj) for spares in watched._spares.values() for obj in spares} == kept
+    assert {id(obj) for obj in watched.spares} == kept
     np.testing.assert_array_equal(first.patch_radiosity, second.patch_radiosity)
     assert leaked(watched) == []
 

@@ -4,6 +4,7 @@ millimetres from another surface (a light plane under a ceiling)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scenes import light_under_ceiling, opposed_squares, solve_settings, surface
 
 from radiosity_addon.core import scene_from_dict, solve, subdivide
@@ -37,6 +38,7 @@ def test_refinement_resolves_the_gap_along_the_emitters_outline_only(gpu):
     assert ceiling.sum() < 0.1 * uniform  # far fewer patches than splitting everything that fine
 
 
+@pytest.mark.slow
 def test_the_gap_at_an_emitter_is_resolved_near_its_opening_even_where_no_light_changes(gpu):
     """The emitter's back gets no direct light (no spread to split on), but light trapped between
     it and the ceiling 5 mm above escapes at the outline: both sides are split there down to

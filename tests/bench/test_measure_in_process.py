@@ -14,7 +14,7 @@ from radiosity_addon import core
 from radiosity_addon.core.settings import QUALITY_PRESETS
 from radiosity_addon.solver_process import child, protocol
 
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "measure_in_process.py"
+TOOL = Path(__file__).resolve().parents[2] / "tools" / "measure_in_process.py"
 
 
 def load_tool():

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import blender_support as support
 import bpy
+import pytest
 
 from bench.cycles import bake_object
 from radiosity_addon.blender.tags import CREATED_UV
@@ -20,6 +21,7 @@ from radiosity_addon.blender.tags import CREATED_UV
 TOLERANCE = 0.05
 
 
+@pytest.mark.slow
 def test_cornell_lightmaps_agree_with_cycles_within_five_percent_per_object():
     support.open_blend(support.CORNELL, method="progressive", quality="final")
     objects = [obj for obj in bpy.context.scene.objects if obj.type == "MESH"]

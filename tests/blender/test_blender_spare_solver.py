@@ -36,25 +36,25 @@ def no_spare_left():
 
 def test_the_next_bake_takes_the_spare_and_bakes_what_a_process_of_its_own_does():
     first, cold = bake_cornell()
-    assert worker._spare is not None and worker.wait_for_spare(60)  # the first bake's end started it
-    spare = worker._spare.process
+    assert worker.spare_process() is not None and worker.wait_for_spare(60)  # the first bake's end started it
+    spare = worker.spare_process()
     second, warm = bake_cornell()
-    assert second.worker._process is spare  # it solved the second bake
-    assert first.worker._process is not spare
+    assert second.worker.process is spare  # it solved the second bake
+    assert first.worker.process is not spare
     assert cold.keys() == warm.keys()
     for name in cold:
         assert np.array_equal(cold[name], warm[name]), name
     assert second.report["counts"] == first.report["counts"]
-    assert worker._spare is not None and worker._spare.process is not spare  # and a new one waits
+    assert worker.spare_process() not in (None, spare)  # and a new one waits
 
 
 def test_a_spare_started_with_another_command_is_ended_not_taken(monkeypatch):
     worker.start_spare()
     assert worker.wait_for_spare(60)
-    stale = worker._spare.process
+    stale = worker.spare_process()
     support.inject_into_solver(monkeypatch, "pass")  # the add-on's code changed since it started
     plan, _ = bake_cornell()
-    assert plan.worker._process is not stale
+    assert plan.worker.process is not stale
     assert ended_within(stale, 10)
 
 
@@ -73,7 +73,7 @@ child.Solve.run = slow_to_end
     plan, images = bake_cornell()
     assert time.monotonic() - started < 60
     # killed by the bake, then reaped on a thread and its files removed
-    assert support.gone_within(lambda: plan.worker._process.poll() is not None
+    assert support.gone_within(lambda: plan.worker.process.poll() is not None
                                and not plan.worker.directory.exists(), 10)
     assert all(image[..., 3].max() > 0 for image in images.values())
 
@@ -81,7 +81,7 @@ child.Solve.run = slow_to_end
 def test_a_spare_ends_on_its_own_after_its_idle_time(monkeypatch):
     support.inject_into_solver(monkeypatch, "import radiosity_addon.solver_process.child as c; c.SPARE_IDLE = 0.5")
     worker.start_spare()
-    spare = worker._spare.process
+    spare = worker.spare_process()
     assert ended_within(spare, 30)
     assert spare.returncode == 0
 
@@ -89,18 +89,18 @@ def test_a_spare_ends_on_its_own_after_its_idle_time(monkeypatch):
 def test_a_spare_ends_when_its_parent_is_gone_or_the_add_on_is_disabled():
     worker.start_spare()
     assert worker.wait_for_spare(60)
-    orphan = worker._spare.process
+    orphan = worker.spare_process()
     orphan.stdin.close()  # what Blender's exit does to the pipe
     assert ended_within(orphan, 10)
     worker.start_spare()  # the spare above has ended: a new one
-    assert worker._spare.process is not orphan
-    spare = worker._spare.process
+    assert worker.spare_process() is not orphan
+    spare = worker.spare_process()
     from radiosity_addon.blender import ui_bake
     ui_bake.unregister()  # disabling the add-on (no bake runs)
-    assert worker._spare is None and ended_within(spare, 10)
+    assert worker.spare_process() is None and ended_within(spare, 10)
 
 
 def test_no_spare_when_none_is_wanted():
     worker.keep_spare(False)  # the command line: one bake, then the process ends
     bake_cornell()
-    assert worker._spare is None
+    assert worker.spare_process() is None

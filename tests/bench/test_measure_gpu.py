@@ -13,7 +13,7 @@ import numpy as np
 from radiosity_addon import core
 from radiosity_addon.solver_process import child, protocol
 
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "measure_gpu.py"
+TOOL = Path(__file__).resolve().parents[2] / "tools" / "measure_gpu.py"
 
 
 def test_solve_writes_the_solver_process_lightmaps_and_timings(tmp_path, gpu):

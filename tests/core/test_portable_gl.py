@@ -22,7 +22,7 @@ from radiosity_addon.core.visibility.hemisphere import VisibilityMap
 
 pytestmark = pytest.mark.gl  # covers every shader and pass: run again on zink (make test-zink)
 
-SHADERS = Path(__file__).resolve().parents[1] / "shaders"
+SHADERS = Path(__file__).resolve().parents[2] / "shaders"
 
 
 @pytest.fixture

@@ -24,6 +24,7 @@ def rooms():
     return [bake_room_in_stages(target, SOLVE, material_maps=False) for target in (1000, 4000)]
 
 
+@pytest.mark.slow
 def test_the_solve_and_the_lightmaps_grow_with_the_room_not_faster(rooms):
     small, big = rooms
     ratio = big["triangles"] / small["triangles"]

@@ -71,13 +71,15 @@ class ButtonBake:
         steps = prepare_steps(context, context.scene.radiosity.bake_options(context.selected_objects),
                               preview_interval=preview_interval, clock=clock)
         clock.preparing(next(steps))
+        self.baking = ui_bake.begin_preparing(self.ui, steps, clock)
+        # the operator as Blender gives it to `modal`: its reports, and the bake `invoke` began
         self.operator = SimpleNamespace(report=lambda kind, text: self.reports.append((kind, text)),
-                                        _bake=ui_bake.begin_preparing(self.ui, steps, clock))
+                                        _bake=self.baking)
         self.result = {"RUNNING_MODAL"}
 
     @property
     def plan(self):
-        return self.operator._bake.plan
+        return self.baking.plan
 
     def tick(self, event_type="TIMER"):
         event = SimpleNamespace(type=event_type, value="PRESS")
@@ -99,7 +101,7 @@ class ButtonBake:
         assert not any(handler in handlers for handlers, handler in ui_bake.HANDLERS)
         # the solver process has ended and its files are gone (after a bake that succeeded, a
         # thread reaps it and removes them: within moments)
-        assert support.gone_within(lambda: self.plan.worker._process.poll() is not None
+        assert support.gone_within(lambda: self.plan.worker.process.poll() is not None
                                    and not self.plan.worker.directory.exists(), 10)
         assert bpy.ops.radiosity.bake.poll()
 
@@ -134,7 +136,7 @@ def test_the_preparation_runs_a_step_a_tick_and_escape_during_it_changes_nothing
     was (the sample has its Lightmap UV maps; the Cornell box's made then are taken back: the Esc test)."""
     context = support.open_blend(support.SAMPLES / "textured.blend", method="progressive", subdivision=2)
     bake = ButtonBake(context)
-    assert bake.plan is None and bake.operator._bake.clock.stage.startswith("exporting")  # what the next tick does
+    assert bake.plan is None and bake.baking.clock.stage.startswith("exporting")  # what the next tick does
     stages = []
     while bake.plan is None:
         bake.tick()
@@ -198,7 +200,7 @@ def test_live_preview_shows_the_light_building_up_then_the_final_images_replace_
 def test_a_solid_viewport_gets_no_preview_it_could_not_show():
     context = support.open_blend(support.CORNELL, method="progressive", subdivision=4)
     bake = ButtonBake(context, preview_interval=0.2, shading="SOLID")
-    bake.run_until(lambda: bake.plan.worker._preview is not None)  # a snapshot came, and waits unshown
+    bake.run_until(lambda: bake.plan.worker.preview_waiting)  # a snapshot came, and waits unshown
     assert bake.plan.preview is None and preview_images() == []
     assert bake.ui.window_manager.redraws == 0  # nor was the viewport redrawn for it
     bake.tick("ESC")
@@ -259,7 +261,7 @@ def test_disabling_the_addon_during_a_bake_takes_everything_back(monkeypatch):
     try:
         assert not hasattr(bpy.types, "RADIOSITY_OT_bake")
         assert ui_bake.running is None and bake.status[-1] is None and bake.ui.window_manager.timers == []
-        assert bake.plan.worker._process.poll() is not None
+        assert bake.plan.worker.process.poll() is not None
         assert support.blend_state() == before  # no Lightmap UV map stays behind
     finally:
         blender.register()
