@@ -34,10 +34,11 @@ def one_at_a_time(base: SolveSettings, **axes) -> tuple[SolveSettings, ...]:
 
 
 def make_plan(quick: bool) -> SweepPlan:
-    # final's preset with the finer hemi-cubes and probe the sweep was first measured with
+    # final's preset with the finer hemi-cubes the sweep was first measured with, and no refinement:
+    # the sweep maps each patch to its grid cell (texels.py), which a refined patch's children share
     hemicube = SolveSettings(method="hemicube", quality="final", subdiv=6, hemicube_res=64, hemicube_elements=2,
-                             probe_pieces=8, solver="jacobi-gpu", tolerance=1e-5)
-    progressive = SolveSettings(method="progressive", quality="final", subdiv=4, elements=4, probe_pieces=8,
+                             refinements=0, solver="jacobi-gpu", tolerance=1e-5)
+    progressive = SolveSettings(method="progressive", quality="final", subdiv=4, elements=4, refinements=0,
                                 tolerance=1e-3)
     if quick:
         return SweepPlan(

@@ -63,7 +63,10 @@ def _patch_lookup(patches: Patches, surface_count: int) -> np.ndarray:
     n = int(patches.split.max())
     lookup = np.full((surface_count, n, 2 * n), -1, dtype=np.int64)
     fronts = np.flatnonzero(~patches.is_back)  # the texels show the front
-    lookup[patches.surface[fronts], patches.grid[fronts, 0], patches.grid[fronts, 1]] = fronts
+    keys = np.stack([patches.surface[fronts], patches.grid[fronts, 0], patches.grid[fronts, 1]], axis=1)
+    if len(np.unique(keys, axis=0)) < len(fronts):  # refined patches' children keep their parent's cell
+        raise ValueError("refined patches share a grid cell: the sweep maps unrefined solves only (refinements=0)")
+    lookup[keys[:, 0], keys[:, 1], keys[:, 2]] = fronts
     return lookup
 
 

@@ -1,10 +1,10 @@
-"""Rewrite the README's measured figures from the JSON the benchmarks write.
+"""Rewrite the README's (and docs/benchmarks.md's) measured figures from the JSON the benchmarks write.
 
-    .venv/bin/python tools/readme_figures.py           # rewrite the blocks in README.md
-    .venv/bin/python tools/readme_figures.py --check   # exit 1 if README.md is out of date
+    .venv/bin/python tools/readme_figures.py           # rewrite the blocks in both documents
+    .venv/bin/python tools/readme_figures.py --check   # exit 1 if either is out of date
     make readme-figures
 
-Every table of numbers in README.md sits between two markers,
+Every table of current numbers in README.md and docs/benchmarks.md sits between two markers,
 
     <!-- figures:NAME -->
     ...generated, do not edit by hand...
@@ -260,13 +260,16 @@ BLOCKS = {
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--check", action="store_true", help="change nothing; exit 1 if the README is out of date")
-    parser.add_argument("--readme", type=Path, default=ROOT / "README.md")
+    parser.add_argument("--document", type=Path, action="append",
+                        help="a document to rewrite (default: README.md and docs/benchmarks.md)")
     parser.add_argument("--bench-dir", type=Path, default=ROOT / "docs" / "bench",
                         help="where the benchmark JSON is (default docs/bench)")
     args = parser.parse_args(argv)
     render = {name: (lambda block=block: block(args.bench_dir)) for name, block in BLOCKS.items()}
+    documents = args.document or [ROOT / "README.md", ROOT / "docs" / "benchmarks.md"]
     try:
-        return update("readme_figures", args.readme, "figures", render, args.check, "readme-figures")
+        return max(update("readme_figures", document, "figures", render, args.check, "readme-figures")
+                   for document in documents)
     except (KeyError, TypeError, ValueError, IndexError) as error:  # a JSON of another shape
         print(f"readme_figures: docs/bench JSON not as the benchmark tools write it: {error!r}", file=sys.stderr)
         return 2

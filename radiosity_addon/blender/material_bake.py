@@ -62,7 +62,7 @@ def _bake_groups(objects) -> list[list]:
 
 
 @contextlib.contextmanager
-def _cycles_for_baking(scene):
+def cycles_for_baking(scene):
     """Cycles on the CPU with the bake's settings, restored afterwards."""
     render, cycles, bake = scene.render, scene.cycles, scene.render.bake
     saved = (render.engine, cycles.device, cycles.samples, bake.margin, bake.margin_type, bake.use_clear,
@@ -135,7 +135,7 @@ def _original_shading(objects):
 
 
 @contextlib.contextmanager
-def _bake_targets(objects, images: dict):
+def bake_targets(objects, images: dict):
     """Every material of `objects` gets an active Image Texture node showing its object's image."""
     added, active = [], {}
     try:
@@ -192,10 +192,10 @@ def bake_material_maps_steps(context, objects, sizes: dict):
     view_layer = context.view_layer
     selected, active_object = [o for o in view_layer.objects if o.select_get()], view_layer.objects.active
     try:
-        with _cycles_for_baking(context.scene), _default_materials(objects), _original_shading(objects):
+        with cycles_for_baking(context.scene), _default_materials(objects), _original_shading(objects):
             groups = _bake_groups(objects)
             for number, group in enumerate(groups):
-                with _bake_targets(group, images):
+                with bake_targets(group, images):
                     for obj in view_layer.objects:
                         obj.select_set(obj in group)
                     view_layer.objects.active = group[0]
@@ -277,7 +277,7 @@ def uniform_material_values(materials) -> dict:
         images = {obj.name: bpy.data.images.new(f"{obj.name} bake", 2, 2, alpha=False, float_buffer=True)
                   for obj in objects}
         try:
-            with _default_materials(objects), _original_shading(objects), _bake_targets(objects, images):
+            with _default_materials(objects), _original_shading(objects), bake_targets(objects, images):
                 for kind, (pass_type, passes) in PASSES.items():
                     _bake_probes(scene, objects, pass_type, passes)
                     for (name, _), obj in zip(materials, objects):
@@ -311,7 +311,7 @@ def _probe_scene():
     probes alone, not the user's scene (a large scene takes longer to sync than its probes)."""
     scene = bpy.data.scenes.new("Radiosity probes")
     try:
-        with _cycles_for_baking(scene):
+        with cycles_for_baking(scene):
             yield scene
     finally:
         bpy.data.scenes.remove(scene)

@@ -136,7 +136,7 @@ def transparency_copy(material):
 def bake_opacity(materials) -> dict:
     """{material name: float32 (H, W) alpha, row 0 at v = 0} for `materials` (those that let light
     through), baked by Cycles on probe planes in a scene of their own, all in one bake."""
-    from .material_bake import _bake_probes, _bake_targets, _pixels, _probe_plane, _probe_scene
+    from .material_bake import _bake_probes, bake_targets, _pixels, _probe_plane, _probe_scene
 
     materials = list({material.name: material for material in materials}.values())
     if not materials:
@@ -153,7 +153,7 @@ def bake_opacity(materials) -> dict:
         images = {obj.name: bpy.data.images.new(f"{obj.name} bake", *texture_size(material), alpha=False,
                                                 float_buffer=True) for obj, material in zip(objects, materials)}
         try:
-            with _bake_targets(objects, images):
+            with bake_targets(objects, images):
                 _bake_probes(scene, objects, "EMIT", set())
             for obj, material in zip(objects, materials):
                 transparency = _pixels(images[obj.name]).mean(axis=2)

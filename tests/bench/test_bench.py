@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench import metrics, scenes, texels
+from bench import metrics, scenes, sweep, texels
 from radiosity_addon.cli import build_parser
 from radiosity_addon.core import subdivide
 from radiosity_addon.core import load_scene, scene_from_dict
@@ -85,3 +85,20 @@ def test_cycles_bake_lands_on_the_grid_in_radiosity_units():
     ratio = baked[0][inside][:, 0] / exact[inside]
     assert np.abs(ratio.mean() - 1) < 0.02  # same units, no clamping or bounce cut
     assert np.abs(ratio - 1).max() < 0.15  # same orientation of the grid (no flip or transpose)
+
+
+def test_the_sweep_maps_unrefined_solves_and_refuses_refined_ones():
+    """texels.py finds a texel's patch by its grid cell, which the 2 x 2 children of a refined patch
+    share: the sweep solves without refinement, and a refined solve is refused rather than shown as
+    one child stretched over its parent (what rated every progressive run ~25 % off)."""
+    from radiosity_addon.core.scene import split_patches
+
+    plan = sweep.make_plan(quick=True)
+    assert all(settings.refinements == 0 for settings in (*plan.hemicube, *plan.progressive))
+    scene = load_scene("cornell-box")
+    backs = np.zeros(len(scene), dtype=bool)
+    patches = subdivide(scene, 2, 0.5, backs)
+    assert texels.texel_patches(scene, patches, 8).max() == len(patches) - 1  # every patch shows
+    refined = split_patches(patches, np.arange(len(patches)) == 0, backs)
+    with pytest.raises(ValueError, match="share a grid cell"):
+        texels.texel_patches(scene, refined, 8)

@@ -39,7 +39,7 @@ from bench import blend_lightmaps, blend_reference, compare
 from radiosity_addon.blender.bake import bake_blocking
 from radiosity_addon.blender.headless import HeadlessBake, bake_file
 from radiosity_addon.blender.tags import lightmap_image_name
-from radiosity_addon.blender.material_bake import _bake_targets, _cycles_for_baking, bake_material_maps
+from radiosity_addon.blender.material_bake import bake_targets, cycles_for_baking, bake_material_maps
 
 TEXEL_DENSITY = 16.0  # texels per metre: 6 cm texels, a 3 m wall 48 texels across
 SAMPLES = 96  # Cycles paths per texel and seed (two seeds)
@@ -336,7 +336,7 @@ def test_the_baked_rug_shows_its_texture_as_sharp_as_the_material():
     try:
         support.select_only([rug])
         bpy.context.view_layer.objects.active = rug
-        with _cycles_for_baking(bpy.context.scene), _bake_targets([rug], {"Rug": shown_image}):
+        with cycles_for_baking(bpy.context.scene), bake_targets([rug], {"Rug": shown_image}):
             bpy.ops.object.bake(type="EMIT", uv_layer="Lightmap", margin=0, use_clear=True)
         shown = support.image_rgba(shown_image)[..., :3].astype(np.float64)
     finally:
