@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .scene import Patches, split_patches
-from .scene.gaps import OPPOSED_COSINE, distance_to_outline, facing_partners
+from .scene.gaps import OPPOSED_COSINE, covered_centres, distance_to_outline, facing_partners
 from .scene.rows import row_labels
 from .shooting import MeasuredDirectLight, direct_light_at_elements, patch_scale_shots, same_shots
 from .uvspace import patch_material_values
@@ -114,6 +114,11 @@ def patches_to_refine(patches: Patches, element_light: np.ndarray, threshold: fl
     spread_rule = candidates[close & uneven[candidates]]
     priority[spread_rule] = area[spread_rule]
     if scene_corners is not None:
+        # a patch whose centre a small surface close above hides gathers that shadow as its whole light
+        large = np.flatnonzero(size > min_size)
+        surface_size = np.linalg.norm(scene_corners - scene_corners.mean(axis=1, keepdims=True), axis=2).max(axis=1)
+        hidden = large[covered_centres(patches, large, surface_size)]
+        priority[hidden] = np.maximum(priority[hidden], area[hidden])
         cavity = (size[candidates] > emitter_gap_resolution * gaps) & (emits[candidates] | emits[np.maximum(partners, 0)])
         rows = candidates[cavity]
         opening = near_an_opening(patches, scene_corners, rows, partners[cavity], gaps[cavity])

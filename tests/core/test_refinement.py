@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scenes import light_under_ceiling, opposed_squares, solve_settings, surface
 
-from radiosity_addon.core import scene_from_dict, solve, subdivide
+from radiosity_addon.core import load_scene, scene_from_dict, solve, subdivide
 from radiosity_addon.core.refinement import GAP_RESOLUTION, MIN_CUT, outline_cuts, within_budget
 from radiosity_addon.core.scene.gaps import facing_gaps
 from radiosity_addon.core.scene import split_patches
@@ -212,3 +212,30 @@ def test_the_hemicube_method_measures_only_the_direct_light_refinement_did_not(g
     assert scale > 0
     np.testing.assert_allclose(taken[0], again[0], atol=1e-4 * scale)
     np.testing.assert_allclose(taken[1], again[1], atol=1e-4 * scale)
+
+
+def test_a_patch_whose_centre_a_small_surface_hides_is_split(gpu):
+    """The bundled Cornell box's light hangs 5 mm under the ceiling, its unlit back up: at `good`
+    (1 m patches) the whole ceiling was one patch gathering its light at its centre, right over the
+    light's back, and came out black (1e-4 against 0.064). Split once, its patches gather beside
+    the light and agree with `final`'s finer ones; the walls it lights agree too."""
+    scene = load_scene("cornell-box")
+    names = [scene.surface(i).name for i in range(len(scene))]
+
+    def mean_radiosity(solution, name):
+        patches = solution.patches
+        mask = ~patches.is_back & (patches.surface == names.index(name))
+        light = solution.patch_radiosity[mask].mean(axis=1)
+        return float((light * patches.area[mask]).sum() / patches.area[mask].sum()), int(mask.sum())
+
+    unrefined = solve(scene, solve_settings(quality="good", method="hemicube", hemicube_res=32,
+                                            hemicube_elements=1, refinements=0), gpu=gpu)
+    good = solve(scene, solve_settings(quality="good", method="hemicube", hemicube_res=32, hemicube_elements=1),
+                 gpu=gpu)
+    fine = solve(scene, solve_settings(quality="final", method="hemicube", hemicube_res=32, hemicube_elements=1),
+                 gpu=gpu)
+    assert mean_radiosity(unrefined, "ceiling") == (pytest.approx(0.0, abs=1e-3), 1)  # the fault, unrefined
+    ceiling, pieces = mean_radiosity(good, "ceiling")
+    assert pieces >= 4 and ceiling == pytest.approx(mean_radiosity(fine, "ceiling")[0], rel=0.05)
+    for wall in ("left_wall_upper", "right_wall", "back_wall"):
+        assert mean_radiosity(good, wall)[0] == pytest.approx(mean_radiosity(fine, wall)[0], rel=0.05)

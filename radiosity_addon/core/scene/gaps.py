@@ -39,6 +39,28 @@ def facing_partners(patches: Patches, candidates: np.ndarray) -> tuple[np.ndarra
     return gaps, partners
 
 
+def covered_centres(patches: Patches, candidates: np.ndarray, surface_size: np.ndarray) -> np.ndarray:
+    """(len(candidates),) bool: the candidates whose centre lies under a smaller surface close in
+    front of it, closer than half the candidate's size, either side turned towards it (an emitter's
+    unlit back 5 mm under a ceiling patch many times its size). A patch gathers its light at its
+    centre, which then sees that surface over most of its hemisphere: the whole patch would take
+    the dark footprint's light. `surface_size` (S,): each surface's size (its bounding radius)."""
+    centre, normal = patches.center, patches.normal
+    radius = np.linalg.norm(patches.corners - centre[:, None], axis=2).max(axis=1)
+    size = np.sqrt(patches.area)
+    covered = np.zeros(len(candidates), dtype=bool)
+    for query, other in near_pairs(centre, radius, candidates, 0.5 * size[candidates]):
+        rows = candidates[query]
+        offset = centre[other] - centre[rows]
+        along = np.einsum("nd,nd->n", offset, normal[rows])  # how far in front of the candidate
+        parallel = np.abs(np.einsum("nd,nd->n", normal[rows], normal[other])) > OPPOSED_COSINE
+        lateral = np.linalg.norm(offset - along[:, None] * normal[rows], axis=1)
+        hit = ((along > 0) & (along < 0.5 * size[rows]) & parallel & (patches.surface[other] != patches.surface[rows])
+               & (lateral < 0.5 * size[other]) & (surface_size[patches.surface[other]] < 0.5 * size[rows]))
+        covered[query[hit]] = True
+    return covered
+
+
 def facing_gaps(patches: Patches, candidates: np.ndarray) -> np.ndarray:
     """The gaps of `facing_partners`."""
     return facing_partners(patches, candidates)[0]
