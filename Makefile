@@ -39,8 +39,11 @@ test: setup
 # over the Vulkan software device (needs: apt-get install mesa-vulkan-drivers)
 ZINK := LIBGL_ALWAYS_SOFTWARE=1 MESA_LOADER_DRIVER_OVERRIDE=zink EGL_PLATFORM=surfaceless \
   XDG_RUNTIME_DIR=$${XDG_RUNTIME_DIR:-/tmp} RADIOSITY_EXPECT_RENDERER=zink
+# Mesa 22.3's zink has crashed once in seven runs here inside a buffer's creation (a signal, not a
+# failed test): a crash, and only a crash, is said and run once more
 test-zink: setup
-	$(ZINK) $(PY) -m pytest -m gl
+	$(ZINK) $(PY) -m pytest -m gl || { status=$$?; [ $$status -ge 128 ] || exit $$status; \
+	  echo "zink crashed (exit $$status): running the gl tests once more"; $(ZINK) $(PY) -m pytest -m gl; }
 
 # the wall-clock ratios `make test` leaves out (tests marked timing): run them on a quiet machine
 test-timing: setup
