@@ -52,9 +52,11 @@ def run_once(job, run: dict):
     overrides = {key: value for key, value in run.items() if key != "lightmaps"}
     quality = overrides.pop("quality", "good")
     settings = core.SolveSettings.preset(quality, **overrides)
-    # the preset's lightmap knobs, but the job's texel density: the texels the reference is baked at
+    # the preset's lightmap knobs, but the job's texel density (resolved: an automatic one follows
+    # the preset's budget): the texels the reference is baked at
     knobs = {key: value for key, value in QUALITY_PRESETS[quality]["lightmaps"].items() if key != "texel_density"}
-    lightmaps = dataclasses.replace(lightmap_settings, content="combined", quality=quality,
+    density = core.chosen_texel_density(scene, lightmap_settings, objects)
+    lightmaps = dataclasses.replace(lightmap_settings, content="combined", quality=quality, texel_density=density,
                                     **(knobs | run.get("lightmaps", {})))
     solved = solve_job(scene, settings, lightmaps, objects)
     return solved["solution"], solved["images"], solved["solve"], solved["lightmaps"]

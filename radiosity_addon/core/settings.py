@@ -41,6 +41,7 @@ QUALITY_PRESETS = {
 }
 DEFAULT_QUALITY = "good"  # what SolveSettings() and LightmapSettings() are, and the panel's and CLI's default
 
+PATCHES_ACROSS_SCENE = 2  # a patch is at most the scene's diameter over this: a wall is never one sample
 PATCH_SIZE = QUALITY_PRESETS[DEFAULT_QUALITY]["solve"]["patch_size"]  # the panel's Custom patch size, to start with
 MAX_SPLIT = 64  # patches along one side of a surface in the Patch Size mode
 MIN_SKY_DIRECTIONS, MAX_SKY_DIRECTIONS = 16, 4096  # a texel's own sky: from this many directions
@@ -67,7 +68,8 @@ class SolveSettings:
     method: str = "auto"  # progressive | hemicube | auto: the one the cost model predicts faster
     quality: str = DEFAULT_QUALITY  # the preset the fields left None come from (its tolerances when tolerance is None)
     subdiv: int | None = None  # N: every surface split N x N into patches; None: split by patch_size
-    patch_size: float | None = None  # preset; with subdiv None: longest patch side in scene units
+    patch_size: float | None = None  # preset; with subdiv None: longest patch side in scene units (solve caps
+    # it at the scene's diameter / PATCHES_ACROSS_SCENE)
     elements: int | None = None  # preset; S x S elements per patch (progressive), S a power of two
     hemicube_res: int | None = None  # preset; pixels across the hemi-cube's top face
     hemicube_elements: int | None = None  # preset; hemi-cube method: S x S receiving hemi-cubes per patch

@@ -20,7 +20,7 @@ from .report import Counts, Report
 from .scene import Scene, check_has_emitter, effects_for, subdivide
 from .scene.analysis import simulated_backs
 from .scene.face_clusters import cluster_faces
-from .settings import SolveSettings
+from .settings import PATCHES_ACROSS_SCENE, SolveSettings
 from .shooting import element_areas, patch_means
 from .solution import Solution
 from .refinement import refine
@@ -34,6 +34,9 @@ def solve(scene: Scene, settings: SolveSettings | None = None, progress: Progres
     """Solve radiosity for `scene` (see core/__init__.py for the parameters)."""
     settings = settings or SolveSettings()
     settings.validate()
+    if settings.subdiv is None and settings.patch_size > scene.diameter / PATCHES_ACROSS_SCENE:
+        # a 1 m patch in a 55 cm box would leave each wall one sample of its light
+        settings = replace(settings, patch_size=scene.diameter / PATCHES_ACROSS_SCENE)
     if not scene.material_maps:  # refuse before any GPU work (with maps, once they are read)
         check_has_emitter(scene)
     started = time.perf_counter()

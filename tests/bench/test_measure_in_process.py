@@ -11,7 +11,7 @@ import blender_support  # noqa: F401  (before the tool imports bpy: a temporary 
 import numpy as np
 
 from radiosity_addon import core
-from radiosity_addon.core.settings import QUALITY_PRESETS
+from radiosity_addon.core.settings import PATCHES_ACROSS_SCENE, QUALITY_PRESETS
 from radiosity_addon.solver_process import child, protocol
 
 TOOL = Path(__file__).resolve().parents[2] / "tools" / "measure_in_process.py"
@@ -36,7 +36,8 @@ def test_a_run_is_the_solver_process_bake_with_the_run_settings(tmp_path, gpu):
 
     assert solve_seconds > 0 and lightmap_seconds > 0
     assert solution.report.method == "hemicube" and solution.report.settings.refinements == 1
-    assert solution.report.settings.patch_size == QUALITY_PRESETS["draft"]["solve"]["patch_size"]
+    assert solution.report.settings.patch_size == min(QUALITY_PRESETS["draft"]["solve"]["patch_size"],
+                                                      scene.diameter / PATCHES_ACROSS_SCENE)
     settings = core.SolveSettings.preset("draft", method="hemicube", refinements=1)
     expected_lightmaps = core.LightmapSettings(quality="draft", texel_density=16.0, content="combined",
                                               direct_subsamples=1)

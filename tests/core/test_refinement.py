@@ -215,10 +215,10 @@ def test_the_hemicube_method_measures_only_the_direct_light_refinement_did_not(g
 
 
 def test_a_patch_whose_centre_a_small_surface_hides_is_split(gpu):
-    """The bundled Cornell box's light hangs 5 mm under the ceiling, its unlit back up: at `good`
-    (1 m patches) the whole ceiling was one patch gathering its light at its centre, right over the
-    light's back, and came out black (1e-4 against 0.064). Split once, its patches gather beside
-    the light and agree with `final`'s finer ones; the walls it lights agree too."""
+    """The bundled Cornell box's light hangs 5 mm under the ceiling, its unlit back up: with the
+    whole ceiling one patch (as `good`'s 1 m patches made it) it gathered its light at its centre,
+    right over the light's back, and came out black (1e-4 against 0.064). Split, its patches gather
+    beside the light and agree with `final`'s finer ones; the walls it lights agree too."""
     scene = load_scene("cornell-box")
     names = [scene.surface(i).name for i in range(len(scene))]
 
@@ -229,9 +229,9 @@ def test_a_patch_whose_centre_a_small_surface_hides_is_split(gpu):
         return float((light * patches.area[mask]).sum() / patches.area[mask].sum()), int(mask.sum())
 
     unrefined = solve(scene, solve_settings(quality="good", method="hemicube", hemicube_res=32,
-                                            hemicube_elements=1, refinements=0), gpu=gpu)
-    good = solve(scene, solve_settings(quality="good", method="hemicube", hemicube_res=32, hemicube_elements=1),
-                 gpu=gpu)
+                                            hemicube_elements=1, refinements=0, subdiv=1), gpu=gpu)
+    good = solve(scene, solve_settings(quality="good", method="hemicube", hemicube_res=32, hemicube_elements=1,
+                                       subdiv=1), gpu=gpu)
     fine = solve(scene, solve_settings(quality="final", method="hemicube", hemicube_res=32, hemicube_elements=1),
                  gpu=gpu)
     assert mean_radiosity(unrefined, "ceiling") == (pytest.approx(0.0, abs=1e-3), 1)  # the fault, unrefined
@@ -239,3 +239,20 @@ def test_a_patch_whose_centre_a_small_surface_hides_is_split(gpu):
     assert pieces >= 4 and ceiling == pytest.approx(mean_radiosity(fine, "ceiling")[0], rel=0.05)
     for wall in ("left_wall_upper", "right_wall", "back_wall"):
         assert mean_radiosity(good, wall)[0] == pytest.approx(mean_radiosity(fine, wall)[0], rel=0.05)
+
+
+def test_a_patch_is_never_larger_than_half_the_scene(gpu):
+    """good's 1 m patches in the 55 cm Cornell box made every wall one sample of its light (the
+    left wall's two triangles 8 % dark against Cycles): the solve caps the patch size at the
+    scene's diameter / PATCHES_ACROSS_SCENE, says so in its report, and leaves a given subdivision
+    and a scene larger than its patches alone."""
+    from radiosity_addon.core.settings import PATCHES_ACROSS_SCENE
+
+    scene = load_scene("cornell-box")
+    capped = solve(scene, solve_settings(quality="good", method="hemicube", hemicube_res=16, hemicube_elements=1,
+                                         refinements=0), gpu=gpu)
+    assert capped.report.settings.patch_size == pytest.approx(scene.diameter / PATCHES_ACROSS_SCENE)
+    assert capped.report.settings.patch_size < 0.5 and len(capped.patches) > len(scene)
+    subdivided = solve(scene, solve_settings(quality="good", method="hemicube", hemicube_res=16,
+                                             hemicube_elements=1, refinements=0, subdiv=1), gpu=gpu)
+    assert subdivided.report.settings.patch_size == 1.0 and len(subdivided.patches) == len(scene)
