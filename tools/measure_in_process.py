@@ -31,7 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import bpy  # noqa: E402,F401  (the reference bakes with Cycles)
 
 from radiosity_addon import core  # noqa: E402
-from bench import blend_lightmaps, blend_reference, compare  # noqa: E402
+from bench import blend_lightmaps, blend_reference, compare, pictures  # noqa: E402
 from radiosity_addon.core.settings import QUALITY_PRESETS  # noqa: E402
 from radiosity_addon.solver_process import protocol  # noqa: E402
 
@@ -69,6 +69,8 @@ def main() -> int:
     parser.add_argument("--runs", nargs="+", default=['{"quality": "draft"}', '{"quality": "good"}', '{"quality": "final"}'])
     parser.add_argument("--reference", type=int, default=512, help="Cycles samples per seed of the reference (two seeds)")
     parser.add_argument("--repeat", type=int, default=2, help="runs of each setting; the fastest is reported")
+    parser.add_argument("--pictures", action="store_true",
+                        help="write each run's lightmaps beside the reference's into DIR/pictures (bench/pictures.py)")
     args = parser.parse_args()
     out = args.output_dir
     out.mkdir(parents=True, exist_ok=True)
@@ -89,6 +91,9 @@ def main() -> int:
         solve_seconds = min(r[2] for r in results)
         lightmap_seconds = min(r[3] for r in results)
         result = compare.compare(images, reference["images"], inside, noise=reference["noise"])
+        if args.pictures:
+            prefix = label_of(run).replace("=", "-").replace(" ", "_") + "_"
+            pictures.write_pictures(out / "pictures", prefix, images, reference["images"])
         objects = " ".join(f"{name} {100 * entry['relative_rgb']:+.1f}/{100 * entry['rms']:.1f}"
                            for name, entry in result["objects"].items())
         stages = " ".join(f"{name} {seconds:.2f}" for name, seconds in solution.report.timings.items() if seconds >= 0.005)
